@@ -1,0 +1,1 @@
+"""The `tmeye` command: thin front ends over the tracker and calibration libraries."""

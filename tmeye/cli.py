@@ -1,0 +1,45 @@
+"""`tmeye` entry point: parses the sub-command and turns expected failures into one-line errors."""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+# Sub-command modules, each with register(subparsers) setting `func` on its parser.
+COMMANDS = ("track", "eval", "bench", "calibrate")
+
+
+class UserError(Exception):
+    """An input problem the user can fix: printed as one line, exit status 2."""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="tmeye", description="Real-time stereo tracker (simulated rig by default)")
+    sub = parser.add_subparsers(dest="command", required=True)
+    for name in COMMANDS:
+        try:
+            module = importlib.import_module(f"tmeye.commands.{name}")
+        except ModuleNotFoundError as exc:
+            if exc.name == f"tmeye.commands.{name}":
+                continue  # that command is not part of this build yet
+            raise
+        module.register(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        code = args.func(args)
+    except (UserError, ValueError, FileNotFoundError, OSError) as exc:
+        print(f"tmeye {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        return 130
+    return int(code or 0)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

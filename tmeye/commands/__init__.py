@@ -1,0 +1,1 @@
+"""One module per `tmeye` sub-command; each exposes `register(subparsers)`."""
