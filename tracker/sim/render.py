@@ -1,0 +1,250 @@
+"""Render the simulated stereo rig: exact per-pixel ray casting of textured planes, with ground truth.
+
+The static scene is ray-cast once per gimbal pose and cached; each frame re-casts only the pixels inside
+the bounding boxes of moving things (targets, foliage), applies the illumination gain and adds sensor
+noise from a pre-drawn bank, so a 640x480 pair costs about a millisecond while the cameras are still.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from tracker.frames import GimbalState, StereoFrame
+from tracker.geometry import Camera, StereoRig, gimbal_rotation
+from tracker.sim.scene import MovingObject, Surface
+
+F64 = NDArray[np.float64]
+F32 = NDArray[np.float32]
+U8 = NDArray[np.uint8]
+
+
+@dataclass(frozen=True)
+class TargetTruth:
+    """Truth for one moving object in one frame. Positions in metres; pixel coordinates distorted (raw).
+    centroid_*: eq. (10) over the object's visible pixels (None when not visible)."""
+
+    target_id: int
+    world: F64
+    rig: F64
+    proj_left: F64
+    proj_right: F64
+    centroid_left: F64 | None
+    centroid_right: F64 | None
+    area_left: int
+    visible_fraction: float
+
+
+@dataclass(frozen=True)
+class FrameTruth:
+    """Ground truth of a frame: gimbal angles, per-object truth, and the left foreground id image
+    (uint8 (H, W): 0 background, k for moving object k)."""
+
+    t: float
+    gimbal: GimbalState
+    targets: tuple[TargetTruth, ...]
+    ids_left: U8
+    ids_right: U8
+
+    def target(self, target_id: int) -> TargetTruth | None:
+        return next((tt for tt in self.targets if tt.target_id == target_id), None)
+
+
+@dataclass
+class _View:
+    """One camera's precomputed rays (rig frame, float32 (H, W, 3)) and its normalised-coordinate range."""
+
+    cam: Camera
+    rays: F32
+    xn_range: tuple[float, float]
+    yn_range: tuple[float, float]
+    xy: F32  # undistorted normalised coordinates of every pixel, (H, W, 2)
+    ray_len: F32  # |(xn, yn, 1)|, (H, W)
+
+
+def _make_view(cam: Camera) -> _View:
+    w, h = cam.size
+    u, v = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
+    xn, yn = cam.undistort_pixels(u, v)
+    rays = cam.rays_rig(u, v).astype(np.float32)
+    xy = np.dstack([xn, yn]).astype(np.float32)
+    ray_len = np.sqrt(1.0 + xn * xn + yn * yn).astype(np.float32)
+    return _View(cam, rays, (float(xn.min()) - 0.02, float(xn.max()) + 0.02),
+                 (float(yn.min()) - 0.02, float(yn.max()) + 0.02), xy, ray_len)
+
+
+def _cast_plane_fast(view: _View, R_wr: F64, s: Surface, img: F32, depth: F32) -> None:
+    """Ray-cast a static rectangular surface over its bounding box with OpenCV calls: on a plane the
+    texture coordinates are a homography of the undistorted normalised coordinates (x_n, y_n), and
+    1/depth is linear in them. Same result as _cast_surface, about 30x faster for large areas."""
+    box = _pixel_box(view, s.corners() @ R_wr)
+    if box is None:
+        return
+    x0, y0, x1, y1 = box
+    R_wc = R_wr @ view.cam.R_rc.T  # camera -> world
+    c = R_wr @ view.cam.c
+    n_c, u_c, v_c = R_wc.T @ s.normal, R_wc.T @ s.u, R_wc.T @ s.v
+    q = float(s.normal @ (s.P0 - c))  # n·(P0 - c)
+    th, tw = s.texture.shape
+    a0, b0 = float((c - s.P0) @ s.u), float((c - s.P0) @ s.v)
+    # x_t = a / texel + tw/2 with a = a0 + q (u_c·m)/(n_c·m), m = (x_n, y_n, 1)
+    H = np.vstack([q * u_c / s.texel_m + (a0 / s.texel_m + tw / 2.0) * n_c,
+                   q * v_c / s.texel_m + (b0 / s.texel_m + th / 2.0) * n_c, n_c])
+    xy = view.xy[y0:y1, x0:x1]
+    mxy = cv2.perspectiveTransform(xy.reshape(-1, 1, 2), H).reshape(xy.shape)
+    val = cv2.remap(s._tex32, mxy, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT101)
+    hw, hh = s.half_w / s.texel_m, s.half_h / s.texel_m
+    hit = cv2.inRange(mxy, (tw / 2.0 - hw, th / 2.0 - hh), (tw / 2.0 + hw, th / 2.0 + hh)) > 0
+    den = n_c[0] * xy[..., 0] + n_c[1] * xy[..., 1] + np.float32(n_c[2])
+    with np.errstate(divide="ignore"):
+        dist = (np.float32(q) / den) * view.ray_len[y0:y1, x0:x1]
+    d_roi = depth[y0:y1, x0:x1]
+    hit &= (dist > 0.05) & (dist < d_roi)
+    np.copyto(d_roi, dist, where=hit)
+    np.copyto(img[y0:y1, x0:x1], val, where=hit)
+
+
+def _pixel_box(view: _View, pts_rig: F64, pad: int = 2) -> tuple[int, int, int, int] | None:
+    """Pixel bounding box (x0, y0, x1, y1) of rig-frame points (N, 3) as seen by `view`, or None when
+    they are all outside the image; the whole image when some point is behind the camera."""
+    cam = view.cam
+    w, h = cam.size
+    Xc = (pts_rig - cam.c) @ cam.R_rc.T
+    if np.any(Xc[:, 2] <= 0.05):
+        return 0, 0, w, h
+    xn, yn = Xc[:, 0] / Xc[:, 2], Xc[:, 1] / Xc[:, 2]
+    x0, x1 = max(xn.min(), view.xn_range[0]), min(xn.max(), view.xn_range[1])
+    y0, y1 = max(yn.min(), view.yn_range[0]), min(yn.max(), view.yn_range[1])
+    if x0 >= x1 or y0 >= y1:
+        return None
+    s = np.linspace(0.0, 1.0, 9)
+    bx = np.concatenate([x0 + (x1 - x0) * s, np.full(9, x1), x0 + (x1 - x0) * s, np.full(9, x0)])
+    by = np.concatenate([np.full(9, y0), y0 + (y1 - y0) * s, np.full(9, y1), y0 + (y1 - y0) * s])
+    u, v = cam.distort_normalized(bx, by)
+    box = (max(int(u.min()) - pad, 0), max(int(v.min()) - pad, 0),
+           min(int(np.ceil(u.max())) + pad + 1, w), min(int(np.ceil(v.max())) + pad + 1, h))
+    return box if box[0] < box[2] and box[1] < box[3] else None
+
+
+def _cast_surface(view: _View, R_wr: F64, s: Surface, t: float, img: F32 | U8, depth: F32, ids: U8 | None,
+                  origin: tuple[int, int] = (0, 0)) -> None:
+    """Ray-cast one surface into img/depth/ids (in place), z-tested. The buffers cover the image window
+    whose top-left pixel is `origin`; only the surface's projected bounding box is cast."""
+    box = _pixel_box(view, s.corners() @ R_wr)  # world -> rig is R_wr.T @ p (row vectors)
+    if box is None:
+        return
+    ox, oy = origin
+    h, w = img.shape
+    x0, y0 = max(box[0], ox), max(box[1], oy)
+    x1, y1 = min(box[2], ox + w), min(box[3], oy + h)
+    if x0 >= x1 or y0 >= y1:
+        return
+    rays = view.rays[y0:y1, x0:x1].reshape(-1, 3).astype(np.float64) @ R_wr.T
+    dist, val, hit = s.intersect(R_wr @ view.cam.c, rays, t)
+    win = (slice(y0 - oy, y1 - oy), slice(x0 - ox, x1 - ox))
+    d_roi = depth[win].reshape(-1)
+    hit &= dist < d_roi
+    if not hit.any():
+        return
+    shape = (y1 - y0, x1 - x0)
+    d_roi[hit] = dist[hit]
+    depth[win] = d_roi.reshape(shape)
+    i_roi = img[win].reshape(-1)
+    i_roi[hit] = np.rint(val[hit]) if img.dtype == np.uint8 else val[hit]
+    img[win] = i_roi.reshape(shape)
+    if ids is not None:
+        id_roi = ids[win].reshape(-1)
+        id_roi[hit] = s.target_id
+        ids[win] = id_roi.reshape(shape)
+
+
+class SimRenderer:
+    """Renders stereo pairs of a scene for given gimbal angles. Not thread-safe; one per worker."""
+
+    def __init__(self, rig: StereoRig, static: list[Surface], seed: int, noise_sigma: float = 1.2):
+        self.rig = rig
+        self.static = static
+        self.views = (_make_view(rig.left), _make_view(rig.right))
+        self._cache: dict[tuple[float, float], tuple[list[U8], list[F32]]] = {}
+        rng = np.random.default_rng(seed + 7919)
+        w, h = rig.left.size
+        self._noise = [self._noise_bank(rng, h, w, noise_sigma) for _ in range(2)]
+        self._rng = np.random.default_rng(seed + 104729)
+        self.windows: list[tuple[int, int, int, int] | None] = [None, None]
+        self._depth = [np.empty((h, w), np.float32) for _ in range(2)]
+
+    @staticmethod
+    def _noise_bank(rng: np.random.Generator, h: int, w: int, sigma: float) -> tuple[U8, U8]:
+        """Positive and negative parts of Gaussian noise, (h + 64, w) each, as uint8."""
+        n = np.round(rng.standard_normal((h + 64, w)) * sigma).clip(-60, 60)
+        return np.maximum(n, 0).astype(np.uint8), np.maximum(-n, 0).astype(np.uint8)
+
+    def _static(self, gimbal: GimbalState) -> tuple[list[U8], list[F32]]:
+        key = (round(gimbal.pan_deg, 6), round(gimbal.tilt_deg, 6))
+        hit = self._cache.get(key)
+        if hit is not None:
+            return hit
+        R_wr = gimbal_rotation(gimbal.pan_deg, gimbal.tilt_deg)
+        imgs, depths = [], []
+        for view in self.views:
+            w, h = view.cam.size
+            img = np.zeros((h, w), np.float32)
+            depth = np.full((h, w), np.inf, np.float32)
+            for surface in self.static:
+                if surface.shape == "rect" and surface.sway is None:
+                    _cast_plane_fast(view, R_wr, surface, img, depth)
+                else:
+                    _cast_surface(view, R_wr, surface, 0.0, img, depth, None)
+            imgs.append(np.clip(np.round(img), 0, 255).astype(np.uint8))
+            depths.append(depth)
+        if len(self._cache) >= 4:
+            self._cache.pop(next(iter(self._cache)))
+        self._cache[key] = (imgs, depths)
+        return imgs, depths
+
+    def static_depth(self, gimbal: GimbalState) -> list[F32]:
+        """Distance (m) along each pixel's ray to the static scene, per camera, (H, W) float32."""
+        return self._static(gimbal)[1]
+
+    def render(self, index: int, t: float, gimbal: GimbalState, moving: list[Surface], gain: float,
+               noisy: bool = True) -> tuple[StereoFrame, list[U8]]:
+        """Render one pair at time t (s). Returns the frame and the (left, right) id images."""
+        base_imgs, base_depths = self._static(gimbal)
+        R_wr = gimbal_rotation(gimbal.pan_deg, gimbal.tilt_deg)
+        out: list[U8] = []
+        ids_out: list[U8] = []
+        for k, view in enumerate(self.views):
+            img8 = base_imgs[k].copy()
+            ids = np.zeros(img8.shape, np.uint8)
+            if moving:
+                self._cast_moving(k, R_wr, moving, t, img8, base_depths[k], ids)
+            if gain != 1.0:
+                img8 = cv2.convertScaleAbs(img8, alpha=gain)
+            if noisy:
+                pos, neg = self._noise[k]
+                o = int(self._rng.integers(0, 64))
+                h = img8.shape[0]
+                img8 = cv2.subtract(cv2.add(img8, pos[o:o + h]), neg[63 - o:63 - o + h])
+            out.append(img8)
+            ids_out.append(ids)
+        frame = StereoFrame(index, out[0], out[1], t, t, gimbal)
+        return frame, ids_out
+
+    def _cast_moving(self, k: int, R_wr: F64, moving: list[Surface], t: float, img8: U8,
+                     base_depth: F32, ids: U8) -> None:
+        """Cast moving surfaces into a copy of the static depth, only over their bounding boxes."""
+        view = self.views[k]
+        boxes = [b for b in (_pixel_box(view, s.corners() @ R_wr) for s in moving) if b is not None]
+        self.windows[k] = None
+        if not boxes:
+            return
+        depth = self._depth[k]
+        np.copyto(depth, base_depth)
+        for s in moving:
+            _cast_surface(view, R_wr, s, t, img8, depth, ids)
+        x0, y0 = min(b[0] for b in boxes), min(b[1] for b in boxes)
+        x1, y1 = max(b[2] for b in boxes), max(b[3] for b in boxes)
+        self.windows[k] = (x0, y0, x1, y1)

@@ -1,0 +1,199 @@
+"""Named scenarios for the simulated rig (`tmeye eval --list`) and the simulated-rig frame source."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from tracker.frames import GimbalState, StereoFrame
+from tracker.geometry import StereoRig, gimbal_rotation
+from tracker.sim.render import FrameTruth, SimRenderer, TargetTruth
+from tracker.sim.rig import default_rig
+from tracker.sim.scene import MovingObject, Surface, backdrop, foliage, plate_texture
+
+F64 = NDArray[np.float64]
+TWO_PI = 2.0 * np.pi
+
+
+def _walk(t: float) -> F64:
+    """Crossing walk: range 3 -> 15 -> 3 m every 10 s, weaving left and right, bobbing."""
+    z = 9.0 - 6.0 * np.cos(TWO_PI * t / 10.0)
+    return np.array([0.3 * z * np.sin(TWO_PI * t / 6.0), 0.1 + 0.15 * np.sin(TWO_PI * t / 4.0), z])
+
+
+def _approach(t: float) -> F64:
+    """Approach from 30 m to 2 m in 10 s with a slight weave."""
+    z = max(30.0 - 2.8 * t, 2.0)
+    return np.array([0.25 * np.sin(TWO_PI * t / 5.0), 0.05 * np.sin(TWO_PI * t / 3.0), z])
+
+
+def _crosser(t: float) -> F64:
+    """Second object: crosses from left to right at 5 m, in front of the primary's path."""
+    return np.array([-2.2 + 0.45 * t, 0.05, 5.0])
+
+
+def _primary_far(t: float) -> F64:
+    """Primary for two-targets: slow walk at 8 to 12 m near the centre."""
+    z = 10.0 - 2.0 * np.cos(TWO_PI * t / 9.0)
+    return np.array([0.6 * np.sin(TWO_PI * t / 7.0), 0.1, z])
+
+
+def _panned(t: float) -> F64:
+    """Target for `pan`: azimuth ±10°, range 6-12 m."""
+    az = np.radians(10.0 * np.sin(TWO_PI * t / 7.0))
+    z = 9.0 - 3.0 * np.cos(TWO_PI * t / 11.0)
+    return np.array([z * np.tan(az), 0.1 + 0.1 * np.sin(TWO_PI * t / 5.0), z])
+
+
+def _behind_post(t: float) -> F64:
+    """Passes behind the post at 9 m (partial then full occlusion) at 12 m range."""
+    return np.array([-7.0 + 0.55 * t, 0.3, 12.0])
+
+
+def _illumination_gain(t: float) -> float:
+    """Global illumination: steps and ramps of ±30 %."""
+    if t < 2.0:
+        return 1.0
+    if t < 4.0:
+        return 1.3  # step up
+    if t < 5.0:
+        return 0.7  # step down
+    if t < 7.0:
+        return 0.7 + 0.3 * (t - 5.0)  # ramp 0.7 -> 1.3
+    if t < 8.0:
+        return 1.3 - 0.6 * (t - 7.0)  # ramp 1.3 -> 0.7
+    return 1.0  # step back
+
+
+def _pan_schedule(t: float) -> GimbalState:
+    return GimbalState(12.0 * np.sin(TWO_PI * t / 8.0), 3.0 * np.sin(TWO_PI * t / 6.0))
+
+
+def _still(t: float) -> GimbalState:
+    return GimbalState(0.0, 0.0)
+
+
+def _unity(t: float) -> float:
+    return 1.0
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A scripted run of the simulated rig. `paths` are (target id, trajectory) pairs: id 1 is primary."""
+
+    name: str
+    description: str
+    frames: int = 300
+    fps: float = 30.0
+    paths: tuple[tuple[int, Callable[[float], F64]], ...] = ((1, _walk),)
+    foliage: bool = False
+    gain: Callable[[float], float] = _unity
+    gimbal: Callable[[float], GimbalState] = _still
+    closed_loop: bool = False
+    tags: tuple[str, ...] = field(default_factory=tuple)
+
+
+SCENARIOS: dict[str, Scenario] = {
+    s.name: s
+    for s in (
+        Scenario("walk", "target crossing at 3 to 15 m, cameras still"),
+        Scenario("illumination", "walk with global illumination steps and ramps of ±30 %",
+                 gain=_illumination_gain),
+        Scenario("foliage", "walk beside a swaying bush", foliage=True),
+        Scenario("approach", "target approaching from 30 m to 2 m", paths=((1, _approach),)),
+        Scenario("two-targets", "primary at 8-12 m, a second object crossing in front of it at 5 m",
+                 paths=((1, _primary_far), (2, _crosser))),
+        Scenario("pan", "cameras panning ±12° and tilting ±3° on a schedule while the target moves",
+                 frames=240, paths=((1, _panned),), gimbal=_pan_schedule),
+        Scenario("occlusion", "target passing behind a post at 9 m (partial, then full occlusion)",
+                 frames=330, paths=((1, _behind_post),)),
+    )
+}
+
+
+def get_scenario(name: str) -> Scenario:
+    try:
+        return SCENARIOS[name]
+    except KeyError:
+        raise ValueError(f"unknown scenario {name!r}; known: {', '.join(sorted(SCENARIOS))}") from None
+
+
+@dataclass(frozen=True)
+class SimFrame:
+    frame: StereoFrame
+    truth: FrameTruth
+
+
+class SimRig:
+    """The simulated stereo rig as a frame source. Gimbal angles come from the scenario's schedule, or
+    from `step(gimbal)` when a servo loop closes through the simulator. Deterministic for a seed."""
+
+    def __init__(self, scenario: Scenario, seed: int = 0, size: tuple[int, int] = (640, 480),
+                 rig: StereoRig | None = None, noise_sigma: float = 1.2):
+        self.scenario = scenario
+        self.rig = rig or default_rig(size)
+        rng = np.random.default_rng(seed)
+        static: list[Surface] = backdrop(rng)
+        self._foliage = foliage(rng, np.array([-1.3, 1.0, 6.0]), 0.7, 0.5) if scenario.foliage else None
+        textures = {1: plate_texture(rng), 2: plate_texture(rng, 150, 235)}
+        self.objects = [MovingObject(tid, path, 0.3, textures[min(tid, 2)]) for tid, path in scenario.paths]
+        self.renderer = SimRenderer(self.rig, static, seed, noise_sigma)
+        self.index = 0
+        self.last_truth: FrameTruth | None = None
+
+    @property
+    def exhausted(self) -> bool:
+        return self.index >= self.scenario.frames
+
+    def background(self, gimbal: GimbalState | None = None) -> StereoFrame:
+        """An empty-scene pair (no moving objects) at the given pose: what a survey would capture."""
+        g = gimbal or self.scenario.gimbal(0.0)
+        frame, _ = self.renderer.render(-1, -1.0, g, [], 1.0)
+        return frame
+
+    def step(self, gimbal: GimbalState | None = None) -> SimFrame:
+        """Render the next frame; `gimbal` overrides the scenario's schedule (closed loop)."""
+        i = self.index
+        t = i / self.scenario.fps
+        g = gimbal if gimbal is not None else self.scenario.gimbal(t)
+        R_wr = gimbal_rotation(g.pan_deg, g.tilt_deg)
+        moving = [o.surface(t, R_wr) for o in self.objects if o.visible(t)]
+        if self._foliage is not None:
+            moving.append(self._foliage)
+        frame, ids = self.renderer.render(i, t, g, moving, self.scenario.gain(t))
+        truth = FrameTruth(t, g, tuple(self._truth(o.target_id, o.trajectory(t), R_wr, ids)
+                                       for o in self.objects), ids[0], ids[1])
+        self.index += 1
+        self.last_truth = truth
+        return SimFrame(frame, truth)
+
+    def read(self) -> StereoFrame | None:
+        """FrameSource protocol: the next frame, None after the scenario's last."""
+        return None if self.exhausted else self.step().frame
+
+    def close(self) -> None:
+        pass
+
+    def _truth(self, tid: int, world: F64, R_wr: F64, ids: list[NDArray[np.uint8]]) -> TargetTruth:
+        rig_p = R_wr.T @ world
+        pl = self.rig.left.project(rig_p[None, :])[0]
+        pr = self.rig.right.project(rig_p[None, :])[0]
+        cents: list[F64 | None] = []
+        area = 0
+        for k, img in enumerate(ids):
+            win = self.renderer.windows[k]
+            if win is None:
+                cents.append(None)
+                continue
+            x0, y0, x1, y1 = win  # moving objects are only ever drawn inside this window
+            m = cv2.moments((img[y0:y1, x0:x1] == tid).view(np.uint8), binaryImage=True)
+            if k == 0:
+                area = int(m["m00"])
+            cents.append(np.array([m["m10"] / m["m00"] + x0, m["m01"] / m["m00"] + y0])
+                         if m["m00"] > 0 else None)
+        expected = np.pi * (self.rig.left.f * 0.3 / max(rig_p[2], 0.1)) ** 2
+        return TargetTruth(tid, world, rig_p, pl, pr, cents[0], cents[1], area, min(area / expected, 1.0))
