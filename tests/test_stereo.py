@@ -1,0 +1,223 @@
+"""Tests of tracker.stereo: exact synthetic sub-pixel shifts, rejection cases, argument errors and the
+Middlebury ground-truth acceptance (median |disparity error| <= 0.25 px on textured points)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from tracker.frames import FrameError
+from tracker.stereo import RegionMatch, match_point, match_region
+
+DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+STEREO_GT = DATA / "stereo-gt"
+PAIRS = ["barn2", "bull", "poster", "sawtooth", "venus"]  # disp2.png scale factor 8 (datasets.xml)
+
+
+def smooth_texture(shape: tuple[int, int], sigma: float, seed: int, shift: float = 0.0) -> np.ndarray:
+    """Gaussian-filtered white noise (periodic, float), translated by `shift` px along x with an exact
+    Fourier phase shift: the result at u is the unshifted texture at u + shift."""
+    rng = np.random.default_rng(seed)
+    H, W = shape
+    F = np.fft.fft2(rng.standard_normal(shape))
+    fy, fx = np.fft.fftfreq(H)[:, None], np.fft.fftfreq(W)[None, :]
+    F *= np.exp(-2.0 * (np.pi * sigma) ** 2 * (fx**2 + fy**2))
+    F *= np.exp(2j * np.pi * fx * shift)
+    return np.fft.ifft2(F).real
+
+
+def to_u8(a: np.ndarray, scale: float = 40.0) -> np.ndarray:
+    return np.clip(np.round(128.0 + scale * a), 0, 255).astype(np.uint8)
+
+
+def shifted_pair(d: float, shape: tuple[int, int] = (96, 192), sigma: float = 1.5, seed: int = 0):
+    """Left and right images of one textured plane at disparity d: right(u - d) = left(u)."""
+    base = smooth_texture(shape, sigma, seed)
+    s = 1.0 / base.std()
+    return to_u8(s * base), to_u8(s * smooth_texture(shape, sigma, seed, shift=d))
+
+
+@pytest.mark.parametrize("d", [3.0, 3.13, 3.25, 3.5, 3.71, 3.9, 17.42])
+def test_exact_subpixel_shift(d: float) -> None:
+    left, right = shifted_pair(d, seed=int(d * 100))
+    rng = np.random.default_rng(7)
+    errors = []
+    for _ in range(25):
+        x, y = rng.uniform(50.0, 180.0), rng.uniform(8.0, 86.0)  # sub-pixel points
+        got = match_point(left, right, x, y, 32)
+        assert got is not None, f"no match at ({x:.2f}, {y:.2f})"
+        errors.append(got - d)
+    assert np.max(np.abs(errors)) < 0.03, f"errors {np.round(errors, 4)}"
+
+
+def test_not_pixel_locked() -> None:
+    """The estimate follows the true fraction linearly: no pull towards integer disparities."""
+    fractions = np.linspace(0.0, 0.9, 10)
+    est = []
+    for f in fractions:
+        left, right = shifted_pair(5.0 + f, sigma=1.2, seed=3)
+        est.append(np.median([match_point(left, right, x, 40.5, 24) for x in range(60, 180, 10)]))
+    assert np.max(np.abs(np.array(est) - 5.0 - fractions)) < 0.02
+
+
+def test_flat_and_untextured_images_give_none() -> None:
+    flat = np.full((60, 120), 90, np.uint8)
+    assert match_point(flat, flat, 80.0, 30.0, 32) is None
+    rows = np.tile(np.arange(60, dtype=np.uint8)[:, None] * 4, (1, 120))  # texture only across rows
+    assert match_point(rows, rows, 80.0, 30.0, 32) is None
+
+
+def test_repetitive_texture_is_ambiguous() -> None:
+    x = np.arange(160)
+    stripes = np.tile((128 + 80 * np.sin(2 * np.pi * x / 8.0)).astype(np.uint8), (60, 1))
+    noise = np.random.default_rng(0).integers(0, 3, stripes.shape).astype(np.uint8)
+    img = stripes + noise
+    assert match_point(img, np.roll(img, -3, axis=1), 100.0, 30.0, 40) is None
+
+
+def test_points_outside_or_at_the_border() -> None:
+    left, right = shifted_pair(4.3)
+    H, W = left.shape
+    for x, y in [
+        (-3.0, 40.0),
+        (W + 2.0, 40.0),
+        (100.0, -1.0),
+        (100.0, H - 2.0),
+        (W - 3.0, 40.0),
+        (3.0, 40.0),
+    ]:
+        assert match_point(left, right, x, y, 32) is None
+    # the true disparity lies outside the searched range: the peak is on the search border
+    assert match_point(left, right, 120.0, 40.0, 3) is None
+
+
+def test_wrong_disparity_sign_is_rejected() -> None:
+    left, right = shifted_pair(6.0)
+    assert match_point(right, left, 120.0, 40.0, 32) is None  # right point lies to the right
+
+
+def test_argument_errors() -> None:
+    img = np.zeros((40, 60), np.uint8)
+    with pytest.raises(FrameError, match="empty"):
+        match_point(np.zeros((0, 60), np.uint8), img, 10, 10, 8)
+    with pytest.raises(FrameError, match="differ in size"):
+        match_point(img, np.zeros((40, 61), np.uint8), 10, 10, 8)
+    with pytest.raises(FrameError, match="uint8"):
+        match_point(img.astype(np.float32), img, 10, 10, 8)
+    with pytest.raises(FrameError, match="uint8"):
+        match_point(np.zeros((40, 60, 3), np.uint8), np.zeros((40, 60, 3), np.uint8), 10, 10, 8)
+    with pytest.raises(ValueError, match="max_disparity must be >= 0"):
+        match_point(img, img, 10, 10, -1)
+    with pytest.raises(ValueError, match="max_disparity must be an integer"):
+        match_point(img, img, 10, 10, 8.5)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="window"):
+        match_point(img, img, 10, 10, 8, window=10)
+    with pytest.raises(ValueError, match="finite"):
+        match_point(img, img, float("nan"), 10, 8)
+    with pytest.raises(ValueError, match="mask"):
+        match_region(img, img, np.zeros((0, 3), bool), 10, 10, 8)
+
+
+def disc_scene(d_fg: float, d_bg: float, shape: tuple[int, int] = (120, 200), seed: int = 5):
+    """A textured disc (disparity d_fg) in front of a textured background (d_bg); returns left, right and
+    the disc's left-image mask."""
+    H, W = shape
+    yy, xx = np.mgrid[0:H, 0:W]
+    cx, cy, r = 120.0, 60.0, 25.0
+    fg = smooth_texture(shape, 1.5, seed)
+    bg = smooth_texture(shape, 1.5, seed + 1)
+    s_fg, s_bg = 1.0 / fg.std(), 1.0 / bg.std()
+    in_left = (xx - cx) ** 2 + (yy - cy) ** 2 <= r * r
+    in_right = (xx + d_fg - cx) ** 2 + (yy - cy) ** 2 <= r * r  # right(u) shows left(u + d)
+    left = np.where(in_left, s_fg * fg, s_bg * bg)
+    right = np.where(
+        in_right,
+        s_fg * smooth_texture(shape, 1.5, seed, d_fg),
+        s_bg * smooth_texture(shape, 1.5, seed + 1, d_bg),
+    )
+    return to_u8(left), to_u8(right), in_left
+
+
+def test_match_region_uses_only_the_masked_target() -> None:
+    left, right, disc = disc_scene(d_fg=12.37, d_bg=4.0)
+    mask = cv2.erode(disc.astype(np.uint8), np.ones((3, 3), np.uint8))
+    ys, xs = np.nonzero(mask)
+    y0, x0 = int(ys.min()), int(xs.min())
+    sub = mask[y0 : ys.max() + 1, x0 : xs.max() + 1].astype(bool)
+    m = match_region(left, right, sub, x0, y0, 40)
+    assert isinstance(m, RegionMatch)
+    assert abs(m.disparity - 12.37) < 0.02
+    assert 0.0 < m.sigma < 0.01 and m.score > 0.99 and abs(m.gain - 1.0) < 0.05
+    m_prior = match_region(left, right, sub, x0, y0, 40, d0=11.0)
+    assert m_prior is not None and abs(m_prior.disparity - m.disparity) < 1e-6
+    # unmasked, the bounding box's background corners (at d = 4) spoil the fit
+    box = match_region(left, right, np.ones_like(sub), x0, y0, 40)
+    assert box is None or (box.score < 0.9 and box.sigma > 2.0 * m.sigma)
+
+
+def test_match_region_sigma_matches_the_scatter() -> None:
+    rng = np.random.default_rng(11)
+    left, right = shifted_pair(7.6, shape=(128, 256), seed=2)
+    mask = np.ones((15, 15), bool)
+    errs, sigmas = [], []
+    for _ in range(60):
+        noisy = np.clip(right + rng.normal(0.0, 6.0, right.shape), 0, 255).astype(np.uint8)
+        x0, y0 = int(rng.integers(60, 220)), int(rng.integers(5, 105))
+        m = match_region(left, noisy, mask, x0, y0, 32)
+        assert m is not None
+        errs.append(m.disparity - 7.6)
+        sigmas.append(m.sigma)
+    ratio = float(np.std(errs) / np.mean(sigmas))
+    assert 0.6 < ratio < 1.6, f"scatter {np.std(errs):.4f} px vs sigma {np.mean(sigmas):.4f} px"
+
+
+def test_match_region_rejections() -> None:
+    left, right = shifted_pair(5.0)
+    assert match_region(left, right, np.ones((5, 1), bool), 50, 50, 32) is None  # fewer than 8 px
+    assert match_region(left, right, np.ones((9, 9), bool), 185, 50, 32) is None  # leaves the image
+    flat = np.full_like(left, 77)
+    assert match_region(flat, flat, np.ones((9, 9), bool), 100, 50, 32) is None
+
+
+def middlebury_points(name: str, n: int, seed: int, window: int = 11):
+    """Left, right, GT disparity (px) and n random textured points away from borders and from depth
+    discontinuities (GT disparity range within the window <= 1 px)."""
+    left = cv2.imread(str(STEREO_GT / name / "im2.png"), cv2.IMREAD_GRAYSCALE)
+    right = cv2.imread(str(STEREO_GT / name / "im6.png"), cv2.IMREAD_GRAYSCALE)
+    gt = cv2.imread(str(STEREO_GT / name / "disp2.png"), cv2.IMREAD_GRAYSCALE).astype(np.float64) / 8.0
+    f = left.astype(np.float32)
+    mu = cv2.blur(f, (window, window))
+    sd = np.sqrt(np.maximum(cv2.blur(f * f, (window, window)) - mu * mu, 0.0))
+    kernel = np.ones((window, window), np.uint8)
+    gt_range = cv2.dilate(gt, kernel) - cv2.erode(gt, kernel)
+    H, W = left.shape
+    yy, xx = np.mgrid[0:H, 0:W]
+    h = window // 2
+    ok = (gt > 0) & (gt_range <= 1.0) & (sd > 5.0)
+    ok &= (yy >= h + 2) & (yy < H - h - 3) & (xx >= h + 40) & (xx < W - h - 5)
+    ys, xs = np.nonzero(ok)
+    idx = np.random.default_rng(seed).choice(xs.size, n, replace=False)
+    return left, right, gt, xs[idx], ys[idx]
+
+
+@pytest.mark.skipif(not STEREO_GT.is_dir(), reason=f"Middlebury test data not found at {STEREO_GT}")
+@pytest.mark.parametrize("name", PAIRS)
+def test_middlebury_accuracy(name: str) -> None:
+    left, right, gt, xs, ys = middlebury_points(name, 300, seed=0)
+    errors, misses = [], 0
+    for x, y in zip(xs, ys, strict=True):
+        d = match_point(left, right, float(x), float(y), 32)
+        if d is None:
+            misses += 1
+        else:
+            errors.append(abs(d - gt[y, x]))
+    med, none_frac = float(np.median(errors)), misses / xs.size
+    print(
+        f"{name}: median |error| {med:.3f} px, {none_frac:.1%} None, p90 {np.percentile(errors, 90):.3f} px"
+    )
+    assert med <= 0.25
+    assert none_frac <= 0.2
+    assert np.mean(np.array(errors) > 1.0) < 0.1  # gross mismatches are rare

@@ -1,0 +1,318 @@
+"""Sub-pixel stereo matching along the epipolar line of a rectified pair.
+
+Conventions: images are rectified grey uint8 of shape (H, W); a left point (x, y) in pixels (sub-pixel
+floats allowed, pixel centres at integers) matches the right point (x - d, y), d = disparity >= 0 (px).
+
+Two steps: an integer search of normalised cross-correlation (cv2.matchTemplate, TM_CCOEFF_NORMED) over
+d in [0, max_disparity], then an iterative 1-D Lucas-Kanade (Gauss-Newton) refinement of d that minimises
+sum w (L(u) - a R(u - d) - b)^2 with linear interpolation of the right image along the row and a gain a /
+offset b model. The refinement is not pixel-locked (unlike a parabola fit on the correlation curve).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from tracker.frames import U8, check_pair
+
+F64 = NDArray[np.float64]
+F32 = NDArray[np.float32]
+
+_PAD = 2  # extra strip columns on each side for interpolation and the gradient
+_MAX_ITER = 10
+_STEP_TOL = 5e-3  # px: the Gauss-Newton update that ends the iteration (it is still applied)
+
+
+@dataclass(frozen=True)
+class RegionMatch:
+    """One disparity for a region. disparity and sigma in px (right x = x - disparity); score is the
+    weighted zero-mean normalised correlation in [-1, 1] at the final disparity; gain = right/left
+    contrast ratio of the gain/offset model."""
+
+    disparity: float
+    sigma: float
+    score: float
+    gain: float
+
+
+@dataclass(frozen=True)
+class _Fit:
+    d: float
+    sigma: float
+    score: float
+    gain: float
+
+
+def _check_images(left: object, right: object, max_disparity: object) -> tuple[U8, U8]:
+    """Validate a rectified pair and the disparity bound; FrameError / ValueError with a one-line reason."""
+    check_pair(left, right)
+    if isinstance(max_disparity, bool) or not isinstance(max_disparity, (int, np.integer)):
+        raise ValueError(f"max_disparity must be an integer, got {max_disparity!r}")
+    if max_disparity < 0:
+        raise ValueError(f"max_disparity must be >= 0, got {max_disparity}")
+    assert isinstance(left, np.ndarray) and isinstance(right, np.ndarray)
+    return left, right
+
+
+def _band_gram(T: NDArray[np.floating], S: NDArray[np.floating], w: F64 | None, k: int) -> list[list[float]]:
+    """Weighted Gram matrix (7, 7) of the mean-removed strip windows k-2 .. k+3 and the template.
+
+    T: template (h, n); S: strip (h, m); w: weights (h*n,) or None. Window j is strip columns
+    j .. j+n-1 flattened like the template; row/column 6 of the result is the template.
+    """
+    h, n = T.shape
+    A = np.empty((7, h * n))
+    cols = np.ascontiguousarray(S[:, k - 2 : k + 3 + n], dtype=np.float64)
+    A[:6].reshape(6, h, n)[...] = np.ndarray((6, h, n), np.float64, cols, 0, (8, cols.strides[0], 8))
+    A[6] = T.ravel()
+    if w is None:
+        A -= (A.sum(axis=1) / A.shape[1])[:, None]
+        G = A @ A.T
+    else:
+        A -= ((A @ w) / w.sum())[:, None]
+        G = (A * w) @ A.T
+    rows: list[list[float]] = G.tolist()
+    return rows
+
+
+def _catmull_rom(f: float) -> tuple[list[float], list[float]]:
+    """Catmull-Rom interpolation weights for taps -1, 0, 1, 2 at fraction f in [0, 1), and their
+    derivatives with respect to f."""
+    f2, f3 = f * f, f * f * f
+    u = [0.5 * (-f3 + 2 * f2 - f), 0.5 * (3 * f3 - 5 * f2 + 2), 0.5 * (-3 * f3 + 4 * f2 + f), 0.5 * (f3 - f2)]
+    v = [
+        0.5 * (-3 * f2 + 4 * f - 1),
+        0.5 * (9 * f2 - 10 * f),
+        0.5 * (-9 * f2 + 8 * f + 1),
+        0.5 * (3 * f2 - 2 * f),
+    ]
+    return u, v
+
+
+def _forms(G: list[list[float]], j: int, u: list[float], v: list[float]) -> tuple[float, ...]:
+    """With M = G[j:j+4, j:j+4] and m = G[j:j+4, 6]: (u'Mu, v'Mu, v'Mv, u'm, v'm), unrolled for speed."""
+    g0, g1, g2, g3 = G[j], G[j + 1], G[j + 2], G[j + 3]
+    u0, u1, u2, u3 = u
+    v0, v1, v2, v3 = v
+    mu0 = g0[j] * u0 + g0[j + 1] * u1 + g0[j + 2] * u2 + g0[j + 3] * u3
+    mu1 = g1[j] * u0 + g1[j + 1] * u1 + g1[j + 2] * u2 + g1[j + 3] * u3
+    mu2 = g2[j] * u0 + g2[j + 1] * u1 + g2[j + 2] * u2 + g2[j + 3] * u3
+    mu3 = g3[j] * u0 + g3[j + 1] * u1 + g3[j + 2] * u2 + g3[j + 3] * u3
+    mv0 = g0[j] * v0 + g0[j + 1] * v1 + g0[j + 2] * v2 + g0[j + 3] * v3
+    mv1 = g1[j] * v0 + g1[j + 1] * v1 + g1[j + 2] * v2 + g1[j + 3] * v3
+    mv2 = g2[j] * v0 + g2[j + 1] * v1 + g2[j + 2] * v2 + g2[j + 3] * v3
+    mv3 = g3[j] * v0 + g3[j + 1] * v1 + g3[j + 2] * v2 + g3[j + 3] * v3
+    return (
+        u0 * mu0 + u1 * mu1 + u2 * mu2 + u3 * mu3,
+        v0 * mu0 + v1 * mu1 + v2 * mu2 + v3 * mu3,
+        v0 * mv0 + v1 * mv1 + v2 * mv2 + v3 * mv3,
+        u0 * g0[6] + u1 * g1[6] + u2 * g2[6] + u3 * g3[6],
+        v0 * g0[6] + v1 * g1[6] + v2 * g2[6] + v3 * g3[6],
+    )
+
+
+def _refine(T: NDArray[np.floating], S: NDArray[np.floating], w: F64 | None, p: float, k: int) -> _Fit | None:
+    """Gauss-Newton (1-D Lucas-Kanade) refinement of the strip position p of template T in strip S.
+
+    T: (h, n); S: (h, m) with S[:, j] at right-image position XS + j; w: weights (h*n,) or None. The
+    template at strip position p samples the strip at p, p+1, .., p+n-1 (Catmull-Rom interpolation along
+    the row); the model is T ~ alpha R(p) + beta. Needs 2 <= k and k + 3 + n <= m; p must stay in
+    [k - 1, k + 2). Returns _Fit with d = -p (caller adds X0 - XS) or None if p leaves that range or the
+    fit is degenerate (no horizontal texture, non-positive gain).
+    """
+    G = _band_gram(T, S, w, k)
+    tt = G[6][6]
+    wsum = float(T.size) if w is None else float(w.sum())
+    for it in range(_MAX_ITER + 1):
+        i = math.floor(p)
+        if not k - 1 <= i <= k + 1:
+            return None
+        u, v = _catmull_rom(p - i)
+        j = i - k + 1  # first band window used by cell i
+        a, b, c, pt, qt = _forms(G, j, u, v)
+        det = a * c - b * b
+        if a <= 0.0 or det <= 1e-12 * a * c:
+            return None
+        alpha = (c * pt - b * qt) / det  # T ~ alpha R + gamma dR/dp + beta, gamma = alpha * dp
+        gamma = (a * qt - b * pt) / det
+        if alpha <= 0.0:
+            return None
+        dp = gamma / alpha
+        if abs(dp) < _STEP_TOL or it == _MAX_ITER:
+            resid = max(tt - alpha * pt - gamma * qt, 0.0)  # sum w r^2 at the least-squares solution
+            sigma = math.sqrt(resid / max(wsum - 3.0, 1.0) * a / det) / alpha
+            score = pt / math.sqrt(a * tt) if tt > 0.0 else 0.0
+            return _Fit(-(p + dp), sigma, score, alpha)
+        p += max(-1.0, min(1.0, dp))
+    return None  # pragma: no cover - the loop always returns
+
+
+def _subpixel_peak(r: F64, k: int) -> float:
+    """Parabola vertex offset (in index units, within +-0.5) around the interior peak r[k]."""
+    y0, y1, y2 = float(r[k - 1]), float(r[k]), float(r[k + 1])
+    den = y0 - 2.0 * y1 + y2
+    return 0.0 if den >= 0.0 else max(-0.5, min(0.5, 0.5 * (y0 - y2) / den))
+
+
+def _second_peak(r: list[float], k: int) -> float:
+    """Highest value of the 1-D correlation r outside the main lobe (monotone descent) around index k."""
+    lo = k
+    while lo > 0 and r[lo - 1] <= r[lo]:
+        lo -= 1
+    hi = k
+    while hi < len(r) - 1 and r[hi + 1] <= r[hi]:
+        hi += 1
+    rest = r[:lo] + r[hi + 1 :]
+    return max(rest) if rest else -1.0
+
+
+def _lr_consistent(left: U8, right: U8, x: float, xr: float, y: float, h: int, dmax: int, tol: float) -> bool:
+    """Integer right-to-left search from (xr, y); True if it lands within tol px of x."""
+    xri, yi = round(xr), round(y)
+    W = left.shape[1]
+    hi = min(xri + h + dmax, W - 1)
+    if xri - h < 0 or hi - xri - h < 2:
+        return False
+    templ = right[yi - h : yi + h + 1, xri - h : xri + h + 1]
+    strip = left[yi - h : yi + h + 1, xri - h : hi + 1]
+    r = cv2.matchTemplate(strip, templ, cv2.TM_CCOEFF_NORMED)[0]
+    return abs(xri + int(np.argmax(r)) - x) <= tol
+
+
+def _match(
+    T: F32, S: F32, w: F32 | None, offset: int, span: int, min_score: float, uniqueness: float
+) -> _Fit | None:
+    """Integer ZNCC search (cv2.matchTemplate) then Gauss-Newton refinement of a template in a strip.
+
+    T: template (h, n); S: strip (h, span + n + 2 * _PAD); w: weights (h, n) or None. Template column c
+    lies at left position X0 + c, strip column j at right position XS + j, offset = X0 - XS, and the
+    candidate disparities d = offset - p for strip positions p = _PAD .. _PAD + span. Returns None if the
+    peak is on the border of the candidates, below min_score, within `uniqueness` of a second peak, or the
+    refinement fails or moves by more than 1 px.
+    """
+    r = cv2.matchTemplate(S[:, _PAD:-_PAD], T, cv2.TM_CCOEFF_NORMED, mask=w)[0].astype(np.float64)
+    if w is not None:
+        r = np.nan_to_num(r, nan=-1.0, posinf=-1.0, neginf=-1.0)
+    kk = int(np.argmax(r))
+    if kk == 0 or kk == span or float(r[kk]) < min_score:
+        return None
+    if float(r[kk]) - _second_peak(r.tolist(), kk) < uniqueness:
+        return None
+    p0 = kk + _PAD + _subpixel_peak(r, kk)
+    fit = _refine(T, S, None if w is None else w.ravel().astype(np.float64), p0, kk + _PAD)
+    if fit is None or abs(fit.d + p0) > 1.0:
+        return None
+    return _Fit(offset + fit.d, fit.sigma, fit.score, fit.gain)
+
+
+def match_point(
+    left: U8,
+    right: U8,
+    x: float,
+    y: float,
+    max_disparity: int,
+    *,
+    window: int = 11,
+    min_std: float = 2.0,
+    min_score: float = 0.8,
+    uniqueness: float = 0.05,
+    lr_tolerance: float = 1.5,
+    max_sigma: float = 0.5,
+) -> float | None:
+    """Disparity d (px) of the left point (x, y) in a rectified pair, right x = x - d; None if unreliable.
+
+    left, right: rectified grey uint8 (H, W). window: odd square window side (px), centred on the pixel
+    column nearest x and on row y (sub-pixel, interpolated in both images alike); the disparity is assumed
+    constant over the window. The match is rejected (None) when the window or the search strip does not
+    fit in the image (the search is clipped at the left edge), the window's grey-level standard deviation
+    is below min_std, the correlation peak lies on the border of the search range, its score is below
+    min_score, a second correlation peak comes within `uniqueness` of it, the refined disparity's 1-sigma
+    exceeds max_sigma px, or the right-to-left search does not return within lr_tolerance px.
+    Raises FrameError / ValueError (one-line message) for bad arguments.
+    """
+    left, right = _check_images(left, right, max_disparity)
+    if isinstance(window, bool) or not isinstance(window, int) or window < 3 or window % 2 == 0:
+        raise ValueError(f"window must be an odd integer >= 3, got {window!r}")
+    x, y = float(x), float(y)
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise ValueError(f"point must be finite, got ({x}, {y})")
+    H, W = left.shape
+    h = window // 2
+    xc = round(x)
+    if not (h <= y < H - h - 1 and xc + h + _PAD < W):
+        return None
+    dmax = min(max_disparity, xc - h - _PAD)  # clip the search at the image's left edge
+    if dmax < 2:
+        return None
+    T = np.asarray(cv2.getRectSubPix(left, (window, window), (xc, y), patchType=cv2.CV_32F), np.float32)
+    if float(cv2.meanStdDev(T)[1][0, 0]) < min_std:
+        return None
+    xs0 = xc - h - dmax - _PAD  # image column of the strip's first column
+    ws = dmax + window + 2 * _PAD
+    S = np.asarray(
+        cv2.getRectSubPix(right, (ws, window), (xs0 + 0.5 * (ws - 1), y), patchType=cv2.CV_32F), np.float32
+    )
+    fit = _match(T, S, None, dmax + _PAD, dmax, min_score, uniqueness)
+    if fit is None or fit.sigma > max_sigma or not 0.0 <= fit.d <= max_disparity:
+        return None
+    if not _lr_consistent(left, right, x, x - fit.d, y, h, max_disparity, lr_tolerance):
+        return None
+    return fit.d
+
+
+def match_region(
+    left: U8,
+    right: U8,
+    mask: NDArray[np.generic],
+    x0: int,
+    y0: int,
+    max_disparity: int,
+    d0: float | None = None,
+    *,
+    search_radius: int = 3,
+    min_score: float = 0.5,
+    uniqueness: float = 0.02,
+) -> RegionMatch | None:
+    """One disparity for the masked left region, mask-weighted.
+
+    mask: (h, w) array covering the left pixels [y0, y0 + h) x [x0, x0 + w) (integer top-left corner);
+    bool or integer masks count non-zero pixels, float masks are weights clipped to [0, 1]. d0: a prior
+    disparity (px); the integer search then covers d0 +- search_radius instead of [0, max_disparity].
+    Returns None when the region or its search strip leaves the image, the region has fewer than 8
+    (weighted) pixels, the correlation peak is on the search border, below min_score or not unique by
+    `uniqueness`, or the refinement fails. sigma comes from the Gauss-Newton normal matrix scaled by the
+    residual variance, so it assumes independent pixel noise.
+    """
+    left, right = _check_images(left, right, max_disparity)
+    m = np.asarray(mask)
+    if m.ndim != 2 or m.size == 0:
+        raise ValueError(f"mask must be a non-empty 2-D array, got shape {m.shape}")
+    if np.issubdtype(m.dtype, np.floating):
+        wgt = np.clip(np.nan_to_num(m.astype(np.float64)), 0.0, 1.0)
+    else:
+        wgt = (m != 0).astype(np.float64)
+    H, W = left.shape
+    mh, mw = m.shape
+    x0, y0 = int(x0), int(y0)
+    if x0 < 0 or y0 < 0 or x0 + mw + _PAD > W or y0 + mh > H or float(wgt.sum()) < 8.0:
+        return None
+    lo, hi = 0, max_disparity
+    if d0 is not None:
+        if not math.isfinite(d0):
+            raise ValueError(f"d0 must be finite, got {d0}")
+        lo, hi = max(0, math.floor(d0) - search_radius), min(max_disparity, math.ceil(d0) + search_radius)
+    hi = min(hi, x0 - _PAD)
+    if hi - lo < 2:
+        return None
+    T = left[y0 : y0 + mh, x0 : x0 + mw].astype(np.float32)
+    xs0 = x0 - hi - _PAD
+    S = right[y0 : y0 + mh, xs0 : x0 + mw - lo + _PAD].astype(np.float32)
+    fit = _match(T, S, wgt.astype(np.float32), hi + _PAD, hi - lo, min_score, uniqueness)
+    if fit is None:
+        return None
+    return RegionMatch(disparity=fit.d, sigma=fit.sigma, score=fit.score, gain=fit.gain)
