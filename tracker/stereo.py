@@ -5,8 +5,11 @@ floats allowed, pixel centres at integers) matches the right point (x - d, y), d
 
 Two steps: an integer search of normalised cross-correlation (cv2.matchTemplate, TM_CCOEFF_NORMED) over
 d in [0, max_disparity], then an iterative 1-D Lucas-Kanade (Gauss-Newton) refinement of d that minimises
-sum w (L(u) - a R(u - d) - b)^2 with linear interpolation of the right image along the row and a gain a /
-offset b model. The refinement is not pixel-locked (unlike a parabola fit on the correlation curve).
+sum w (L(u) - a R(u - d) - b)^2 with Catmull-Rom (cubic) interpolation of the right image along the row
+and a gain a / offset b model. A sub-pixel row y is sampled bilinearly in both images alike. The normal
+equations are formed from a small Gram matrix of the strip windows around the integer peak, so each
+iteration costs a few scalar operations. Unlike a parabola fit on the correlation curve, the refinement
+is not pixel-locked (tests/test_stereo.py checks this on exact synthetic shifts).
 """
 
 from __future__ import annotations
@@ -31,8 +34,8 @@ _STEP_TOL = 5e-3  # px: the Gauss-Newton update that ends the iteration (it is s
 @dataclass(frozen=True)
 class RegionMatch:
     """One disparity for a region. disparity and sigma in px (right x = x - disparity); score is the
-    weighted zero-mean normalised correlation in [-1, 1] at the final disparity; gain = right/left
-    contrast ratio of the gain/offset model."""
+    weighted zero-mean normalised correlation in [-1, 1] at the final disparity; gain = a of the
+    model L ~ a R + b (left/right contrast ratio)."""
 
     disparity: float
     sigma: float
