@@ -1,0 +1,150 @@
+"""The background's geometry: where each key-image pixel's background is seen in the reference image.
+
+Paper eq. (9) compares the key pixel Γ(x, y) with the reference pixel Θ(x - d_x, y - d_y) at the
+background disparity. TMEye learns the background's distance per world direction (a panorama anchored to
+the gimbal base, so it stays valid while the cameras pan) from empty-scene stereo pairs by semi-global
+matching, and turns it into per-pixel correspondence maps for any gimbal pose.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from tracker.frames import GimbalState, StereoFrame
+from tracker.geometry import Camera, gimbal_rotation
+from tracker.rectify import Rectifier
+
+F32 = NDArray[np.float32]
+F64 = NDArray[np.float64]
+U8 = NDArray[np.uint8]
+
+
+@dataclass(frozen=True)
+class CorrespondenceMap:
+    """For a grid of key-image pixels: where their background lies in the reference image.
+
+    map_x, map_y: float32 (h, w) raw reference coordinates; valid: bool (h, w), False where the
+    background is unknown or falls outside the reference image; disparity: float32 (h, w), rectified
+    background disparity (px) for comparing against a target's."""
+
+    map_x: F32
+    map_y: F32
+    valid: NDArray[np.bool_]
+    disparity: F32
+
+
+def _remap_f32(img: F32, mx: F32, my: F32) -> F32:
+    """Bilinear sample of a float image at float coordinates of any 2-D shape (0 outside)."""
+    return np.asarray(cv2.remap(img, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0.0))
+
+
+class BackgroundDepth:
+    """Inverse distance 1/ρ (1/m) of the static background per world direction (0 = unknown), stored on a
+    virtual pinhole canvas of focal `f` pixels looking along the gimbal base's z axis."""
+
+    def __init__(self, rect: Rectifier, pan_range_deg: float = 25.0, tilt_range_deg: float = 12.0):
+        self.rect = rect
+        w, h = rect.rig.left.size
+        self.f = rect.f
+        self.pad = (int(self.f * np.tan(np.radians(pan_range_deg))),
+                    int(self.f * np.tan(np.radians(tilt_range_deg))))
+        self.canvas = np.zeros((h + 2 * self.pad[1], w + 2 * self.pad[0]), np.float32)
+        self.cx, self.cy = w / 2.0 + self.pad[0], h / 2.0 + self.pad[1]
+        self.rays = tuple(self._rays(cam) for cam in (rect.rig.left, rect.rig.right))
+
+    @staticmethod
+    def _rays(cam: Camera) -> F32:
+        w, h = cam.size
+        u, v = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
+        return cam.rays_rig(u, v).astype(np.float32)
+
+    # -- learning ---------------------------------------------------------------------------------
+    def learn(self, frame: StereoFrame, max_disparity: int | None = None) -> int:
+        """Add an empty-scene pair to the panorama by semi-global matching on the rectified pair.
+        Returns the number of background points learnt."""
+        rect = self.rect
+        lr, rr = rect.rectify(frame.left, 0), rect.rectify(frame.right, 1)
+        nd = max_disparity or int(16 * np.ceil(rect.f * rect.b / 2.5 / 16))
+        sgbm = cv2.StereoSGBM_create(minDisparity=0, numDisparities=nd, blockSize=5, P1=8 * 25, P2=32 * 25,
+                                     disp12MaxDiff=1, uniquenessRatio=5, speckleWindowSize=100,
+                                     speckleRange=2, mode=cv2.STEREO_SGBM_MODE_HH)
+        # pad on the left so that the first `nd` columns get a disparity search too
+        pad = lambda img: cv2.copyMakeBorder(img, 0, 0, nd, 0, cv2.BORDER_REPLICATE)  # noqa: E731
+        disp = sgbm.compute(pad(lr), pad(rr))[:, nd:].astype(np.float32) / 16.0
+        ys, xs = np.nonzero(disp > 0.5)
+        d = disp[ys, xs].astype(np.float64)
+        X_rig = self._rect_points_to_rig(xs.astype(np.float64), ys.astype(np.float64), d)
+        g = frame.gimbal or GimbalState()
+        X_w = X_rig @ gimbal_rotation(g.pan_deg, g.tilt_deg).T
+        rho = np.linalg.norm(X_w, axis=1)
+        pu = np.round(self.f * X_w[:, 0] / X_w[:, 2] + self.cx).astype(int)
+        pv = np.round(self.f * X_w[:, 1] / X_w[:, 2] + self.cy).astype(int)
+        ok = (X_w[:, 2] > 0) & (pu >= 0) & (pv >= 0) & (pu < self.canvas.shape[1]) & (pv < self.canvas.shape[0])
+        order = np.argsort(-rho[ok])  # far first, so nearer surfaces win where both land
+        self.canvas[pv[ok][order], pu[ok][order]] = (1.0 / rho[ok][order]).astype(np.float32)
+        self._fill_holes()
+        return int(ok.sum())
+
+    def _rect_points_to_rig(self, x: F64, y: F64, d: F64) -> F64:
+        r = self.rect
+        Z = r.f * r.b / d
+        X = np.stack([(x - r.cx) * Z / r.f, (y - r.cy) * Z / r.f, Z], axis=1)
+        L = r.rig.left
+        return np.asarray(X @ r.R1 @ L.R_rc + L.c)
+
+    def _fill_holes(self, iterations: int = 200) -> None:
+        """Fill unknown pixels inside the learnt area with their farthest known neighbour (occlusion
+        holes belong to the background behind), by repeated grey-level erosion of 1/ρ."""
+        known = self.canvas > 0
+        inv = np.where(known, self.canvas, np.float32(1e6)).astype(np.float32)
+        kernel = np.ones((3, 3), np.uint8)
+        for _ in range(iterations):
+            unknown = inv >= 1e6
+            if not unknown.any():
+                break
+            grown = cv2.erode(inv, kernel)
+            inv = np.where(unknown, grown, inv)
+        self.canvas = np.where(inv >= 1e6, 0.0, inv).astype(np.float32)
+
+    # -- lookup -----------------------------------------------------------------------------------
+    def correspondence(self, key: int, gimbal: GimbalState | None, step: int = 1,
+                       box: tuple[int, int, int, int] | None = None) -> CorrespondenceMap:
+        """Background correspondences from camera `key` (0 left, 1 right) into the other camera, for key
+        pixels on a grid with the given step, optionally only inside box = (x0, y0, x1, y1)."""
+        rig = self.rect.rig
+        cam_k, cam_r = (rig.left, rig.right) if key == 0 else (rig.right, rig.left)
+        rays = self.rays[key]
+        if box is not None:
+            x0, y0, x1, y1 = box
+            rays = rays[y0:y1, x0:x1]
+        rays = rays[::step, ::step]
+        g = gimbal or GimbalState()
+        R_wr = gimbal_rotation(g.pan_deg, g.tilt_deg).astype(np.float32)
+        w = rays @ R_wr.T  # world directions (h, w, 3)
+        inv = _remap_f32(self.canvas, self.f * w[..., 0] / w[..., 2] + np.float32(self.cx),
+                         self.f * w[..., 1] / w[..., 2] + np.float32(self.cy))
+        valid = inv > 0
+        t = 1.0 / np.where(valid, inv, np.float32(1.0))
+        # ρ is measured from the pivot; the ray starts at the lens centre c: first-order correction
+        c_w = (R_wr @ cam_k.c.astype(np.float32))
+        t = t - (w @ c_w)
+        X = cam_k.c.astype(np.float32) + t[..., None] * rays  # rig frame (h, w, 3)
+        Xc = (X - cam_r.c.astype(np.float32)) @ cam_r.R_rc.T.astype(np.float32)
+        z = Xc[..., 2]
+        mx, my = cam_r.distort_normalized(Xc[..., 0] / z, Xc[..., 1] / z)
+        W, H = cam_r.size
+        valid &= (z > 0) & (mx >= 0) & (my >= 0) & (mx <= W - 1) & (my <= H - 1)
+        Xl = X if key == 0 else None
+        disp = self._disparity(Xl if Xl is not None else X)
+        return CorrespondenceMap(mx.astype(np.float32), my.astype(np.float32), valid, disp)
+
+    def _disparity(self, X_rig: F32) -> F32:
+        """Rectified disparity f b / z_rect of rig points (h, w, 3)."""
+        r = self.rect
+        L = r.rig.left
+        z = ((X_rig - L.c.astype(np.float32)) @ (r.R1 @ L.R_rc).astype(np.float32).T)[..., 2]
+        return np.asarray(np.float32(r.f * r.b) / np.maximum(z, np.float32(1e-3)), dtype=np.float32)

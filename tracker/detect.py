@@ -1,0 +1,174 @@
+"""Lighting-independent stereo background subtraction, paper eq. (9), fused with a temporal model.
+
+Per frame:
+1. Candidates, on every `stride`-th pixel: the left (key) image Γ is compared with the right (reference)
+   image Θ warped by the background correspondence, m = |Γ(x, y) - Θ(x', y')| > ε + B(x, y), eq. (9).
+   B is the temporal part: a per-pixel floor of the stereo residual that falls at once and rises slowly,
+   so places where the background warp is imperfect (half-occlusions, aliasing) are learnt away, objects
+   that stop merge into the background after `absorb_s`, and a background that reappears is usable in the
+   next frame. A global change of light scales Γ and Θ alike and leaves m unchanged.
+2. Verification at full resolution inside each candidate's box (tracker.verify).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from tracker.bgdepth import BackgroundDepth, CorrespondenceMap
+from tracker.frames import GimbalState, StereoFrame, check_pair
+
+U8 = NDArray[np.uint8]
+Box = tuple[int, int, int, int]
+
+
+@dataclass(frozen=True)
+class DetectorConfig:
+    """epsilon: eq. (9) threshold ε in grey levels; stride: candidate-search subsampling; min_area_px:
+    smallest object (full-resolution pixels); absorb_s: how long a stopped object takes to merge into the
+    background; margin_px: box padding; min_depth_gap: an object's disparity must exceed the background's
+    by this fraction plus `min_disparity_gap_px`."""
+
+    epsilon: int = 12
+    stride: int = 2
+    min_area_px: int = 16
+    absorb_s: float = 20.0
+    fps: float = 30.0
+    margin_px: int = 6
+    min_depth_gap: float = 0.04
+    min_disparity_gap_px: float = 0.5
+    max_disparity: int = 160
+
+    def __post_init__(self) -> None:
+        if not 1 <= self.epsilon <= 254:
+            raise ValueError(f"epsilon must be in 1..254 grey levels, got {self.epsilon}")
+        if self.stride not in (1, 2, 4):
+            raise ValueError(f"stride must be 1, 2 or 4, got {self.stride}")
+        if self.min_area_px < 1 or self.absorb_s <= 0 or self.fps <= 0:
+            raise ValueError("min_area_px, absorb_s and fps must be positive")
+
+
+@dataclass
+class _PoseMaps:
+    """Correspondence maps for one gimbal pose: low-res for candidates, full-res ones filled lazily."""
+
+    pose: tuple[float, float]
+    low: CorrespondenceMap
+    low_fixed: tuple[NDArray[np.int16], NDArray[np.uint16]]
+    full: dict[int, CorrespondenceMap] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Candidates:
+    """Candidate boxes (raw left pixels, x0 y0 x1 y1) and the low-resolution residual image."""
+
+    boxes: tuple[Box, ...]
+    residual: U8
+    moving: bool
+
+
+class StereoSubtractor:
+    """Candidate stage of eq. (9) with the temporal residual floor B. `step(frame)` -> Candidates."""
+
+    def __init__(self, bg: BackgroundDepth, config: DetectorConfig | None = None):
+        self.bg = bg
+        self.cfg = config or DetectorConfig()
+        w, h = bg.rect.rig.left.size
+        s = self.cfg.stride
+        self.low_shape = ((h + s - 1) // s, (w + s - 1) // s)
+        self.floor = np.zeros(self.low_shape, np.uint8)  # B, the temporal residual floor
+        self._maps: _PoseMaps | None = None
+        self._fg_every = max(1, round(self.cfg.absorb_s * self.cfg.fps / 100.0))
+        self._count = 0
+        self.moving = False
+        self._pending: tuple[U8, bool] | None = None
+
+    # -- correspondence maps ----------------------------------------------------------------------
+    def maps(self, gimbal: GimbalState | None) -> _PoseMaps:
+        g = gimbal or GimbalState()
+        pose = (round(g.pan_deg, 4), round(g.tilt_deg, 4))
+        if self._maps is None or self._maps.pose != pose:
+            low = self.bg.correspondence(0, g, step=self.cfg.stride)
+            mx = np.where(low.valid, low.map_x, -10.0).astype(np.float32)
+            fixed = cv2.convertMaps(mx, low.map_y, cv2.CV_16SC2, nninterpolation=True)
+            self._maps = _PoseMaps(pose, low, (fixed[0], fixed[1]))
+        return self._maps
+
+    def correspondence(self, key: int, gimbal: GimbalState | None, box: Box) -> CorrespondenceMap:
+        """Full-resolution correspondence for the pixels in `box` of camera `key`. While the pose stays,
+        the whole image's map is computed once and sliced."""
+        pm = self.maps(gimbal)
+        full = pm.full.get(key)
+        if full is None:
+            if self.moving:  # the pose changes every frame: map only the box
+                return self.bg.correspondence(key, gimbal, box=box)
+            full = self.bg.correspondence(key, gimbal)
+            pm.full[key] = full
+        x0, y0, x1, y1 = box
+        sl = (slice(y0, y1), slice(x0, x1))
+        return CorrespondenceMap(full.map_x[sl], full.map_y[sl], full.valid[sl], full.disparity[sl])
+
+    def floor_at(self, box: Box) -> U8:
+        """The temporal floor B upsampled (nearest) to the full-resolution pixels of `box`."""
+        s = self.cfg.stride
+        x0, y0, x1, y1 = box
+        sub = self.floor[y0 // s:(y1 + s - 1) // s, x0 // s:(x1 + s - 1) // s]
+        up = np.repeat(np.repeat(sub, s, axis=0), s, axis=1) if s > 1 else sub
+        oy, ox = y0 - (y0 // s) * s, x0 - (x0 // s) * s
+        return np.asarray(up[oy:oy + y1 - y0, ox:ox + x1 - x0])
+
+    # -- the step ---------------------------------------------------------------------------------
+    def step(self, frame: StereoFrame) -> Candidates:
+        check_pair(frame.left, frame.right)
+        if frame.left.shape[::-1] != self.bg.rect.rig.left.size:
+            raise ValueError(f"frame size {frame.left.shape[::-1]} does not match the rig's "
+                             f"{self.bg.rect.rig.left.size}")
+        prev = self._maps.pose if self._maps is not None else None
+        pm = self.maps(frame.gimbal)
+        moving = prev is not None and prev != pm.pose
+        self.moving = moving
+        s = self.cfg.stride
+        key = frame.left[::s, ::s] if s > 1 else frame.left
+        ref = cv2.remap(frame.right, pm.low_fixed[0], pm.low_fixed[1], cv2.INTER_NEAREST)
+        resid = cv2.absdiff(key, ref)  # |Γ(x, y) - Θ(x', y')|, eq. (9)
+        excess = cv2.subtract(resid, self.floor)
+        _, fg = cv2.threshold(excess, self.cfg.epsilon, 255, cv2.THRESH_BINARY)
+        fg[~pm.low.valid] = 0
+        boxes = self._boxes(fg)
+        cv2.min(self.floor, resid, dst=self.floor)  # the floor falls at once
+        self._pending = (resid, moving)
+        return Candidates(boxes, resid, moving)
+
+    def _boxes(self, fg: U8) -> tuple[Box, ...]:
+        s, m = self.cfg.stride, self.cfg.margin_px
+        if cv2.countNonZero(fg) == 0:
+            return ()
+        grown = cv2.dilate(fg, np.ones((3, 3), np.uint8))
+        n, _labels, stats, _ = cv2.connectedComponentsWithStats(grown, connectivity=8)
+        h, w = self.bg.rect.rig.left.size[1], self.bg.rect.rig.left.size[0]
+        min_low = max(2, self.cfg.min_area_px // (s * s) // 2)
+        out = []
+        for i in range(1, n):
+            x, y, bw, bh, area = (int(v) for v in stats[i])
+            if area < min_low:
+                continue
+            out.append((max(x * s - m, 0), max(y * s - m, 0), min((x + bw) * s + m, w),
+                        min((y + bh) * s + m, h)))
+        return tuple(out)
+
+    def update_floor(self, foreground_low: U8 | None) -> None:
+        """Let the floor rise by one grey level where the residual is above it: every frame for
+        background pixels, every `_fg_every` frames under verified objects. Frozen while moving."""
+        if self._pending is None:
+            return
+        resid, moving = self._pending
+        self._count += 1
+        if moving:
+            return
+        up = cv2.compare(resid, self.floor, cv2.CMP_GT)
+        if foreground_low is not None and self._count % self._fg_every:
+            up[foreground_low > 0] = 0
+        cv2.add(self.floor, 1, dst=self.floor, mask=up)

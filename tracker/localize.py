@@ -1,0 +1,92 @@
+"""3-D position, range r, azimuth θ and elevation φ of a target, with 1-σ uncertainties.
+
+Parallel-rig triangulation is paper eq. (2) in the rectified frame (tracker.rectify.Rectifier.rect_to_rig);
+`triangulate_dlt` is the general linear triangulation for any calibrated pair of projection matrices.
+Spherical coordinates are about a configurable origin in the world (gimbal base) frame:
+r = |p|, θ = atan2(x, z) (positive to the right), φ = atan2(-y, √(x² + z²)) (positive up).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from tracker.frames import GimbalState
+from tracker.geometry import gimbal_rotation
+from tracker.rectify import Rectifier
+
+F64 = NDArray[np.float64]
+
+
+def triangulate_dlt(P1: F64, P2: F64, x1: F64, x2: F64) -> F64:
+    """Linear (DLT) triangulation: projection matrices (3, 4), undistorted pixel points (2,) each ->
+    the 3-D point (3,) minimising the algebraic error of x ~ P X in both views."""
+    A = np.array([x1[0] * P1[2] - P1[0], x1[1] * P1[2] - P1[1],
+                  x2[0] * P2[2] - P2[0], x2[1] * P2[2] - P2[1]])
+    _, _, vt = np.linalg.svd(A)
+    X = vt[-1]
+    return np.asarray(X[:3] / X[3])
+
+
+def spherical(p: F64) -> tuple[float, float, float]:
+    """(r, θ, φ) of a point (3,) in metres and radians."""
+    x, y, z = (float(v) for v in p)
+    return float(np.linalg.norm(p)), float(np.arctan2(x, z)), float(np.arctan2(-y, np.hypot(x, z)))
+
+
+def spherical_jacobian(p: F64) -> F64:
+    """∂(r, θ, φ)/∂(x, y, z), shape (3, 3)."""
+    x, y, z = (float(v) for v in p)
+    rho2 = x * x + z * z
+    rho = np.sqrt(rho2)
+    r2 = rho2 + y * y
+    r = np.sqrt(r2)
+    return np.array([[x / r, y / r, z / r],
+                     [z / rho2, 0.0, -x / rho2],
+                     [x * y / (r2 * rho), -rho / r2, z * y / (r2 * rho)]])
+
+
+@dataclass(frozen=True)
+class Localization:
+    """A target's position: rig and world frames (m), covariance in the world frame (m², (3, 3)),
+    and r (m), θ, φ (rad) about the origin with their 1-σ."""
+
+    rig: F64
+    world: F64
+    cov_world: F64
+    r: float
+    theta: float
+    phi: float
+    sigma_r: float
+    sigma_theta: float
+    sigma_phi: float
+
+
+class Localizer:
+    """Rectified centroid + disparity -> 3-D point and spherical coordinates with uncertainties."""
+
+    def __init__(self, rect: Rectifier, origin: F64 | None = None, centroid_sigma_px: float = 0.05):
+        self.rect = rect
+        self.origin = np.zeros(3) if origin is None else np.asarray(origin, float)
+        self.centroid_sigma_px = centroid_sigma_px
+
+    def locate(self, centroid_rect: F64, disparity: float, disparity_sigma: float, area: int,
+               gimbal: GimbalState | None) -> Localization:
+        x, y = float(centroid_rect[0]), float(centroid_rect[1])
+        X_rig = self.rect.rect_to_rig(x, y, disparity)  # eq. (2)
+        J = self.rect.rig_to_rect_jacobian(x, y, disparity)
+        s_c = max(self.centroid_sigma_px, 0.5 / np.sqrt(max(area, 1)))
+        S = np.diag([s_c**2, s_c**2, max(disparity_sigma, 0.02) ** 2])
+        cov_rig = J @ S @ J.T
+        g = gimbal or GimbalState()
+        R_wr = gimbal_rotation(g.pan_deg, g.tilt_deg)
+        X_w = R_wr @ X_rig
+        cov_w = R_wr @ cov_rig @ R_wr.T
+        rel = X_w - self.origin
+        r, th, ph = spherical(rel)
+        Js = spherical_jacobian(rel)
+        cs = Js @ cov_w @ Js.T
+        sr, st, sp = (float(np.sqrt(max(cs[i, i], 0.0))) for i in range(3))
+        return Localization(X_rig, X_w, cov_w, r, th, ph, sr, st, sp)

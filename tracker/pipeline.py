@@ -1,0 +1,110 @@
+"""The per-frame pipeline: detection (eq. 9), centroid (eq. 10), matching and triangulation (eq. 1-2),
+identities, and the primary target's r, θ, φ.
+
+`Pipeline.step(frame) -> FrameResult` is pure computation on its own state: call it from one worker
+thread (the server runs it that way); results are immutable dataclasses that can be handed to other
+threads and published to many subscribers.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from tracker.bgdepth import BackgroundDepth
+from tracker.detect import DetectorConfig, StereoSubtractor
+from tracker.frames import StereoFrame
+from tracker.geometry import StereoRig
+from tracker.localize import Localization, Localizer
+from tracker.rectify import Rectifier
+from tracker.tracks import MultiTracker, TrackerConfig
+from tracker.verify import Blob, Verifier
+
+F64 = NDArray[np.float64]
+STAGES = ("candidates", "verify", "localize", "track")
+
+
+@dataclass(frozen=True)
+class Detection:
+    """One verified object: its blob, 3-D localisation and track id (-1 before it has one)."""
+
+    blob: Blob
+    loc: Localization
+    track_id: int
+
+
+@dataclass(frozen=True)
+class FrameResult:
+    """Everything the pipeline knows after a frame. primary: the primary target's detection this frame,
+    None if it was not seen. stage_ms: time per stage (milliseconds)."""
+
+    index: int
+    t: float
+    detections: tuple[Detection, ...]
+    primary_id: int | None
+    primary: Detection | None
+    stage_ms: dict[str, float] = field(default_factory=dict)
+
+    def foreground_mask(self, shape: tuple[int, int]) -> NDArray[np.bool_]:
+        """The full-resolution left foreground mask of all verified objects, (H, W) bool."""
+        out = np.zeros(shape, bool)
+        for det in self.detections:
+            x0, y0, x1, y1 = det.blob.box
+            out[y0:y1, x0:x1] |= det.blob.mask
+        return out
+
+
+class Pipeline:
+    """Composes the stages for one rig. Learn the background first (`learn_background`)."""
+
+    def __init__(self, rig: StereoRig, detector: DetectorConfig | None = None,
+                 tracker: TrackerConfig | None = None, origin: F64 | None = None):
+        self.rig = rig
+        self.rect = Rectifier(rig)
+        self.bg = BackgroundDepth(self.rect)
+        self.subtractor = StereoSubtractor(self.bg, detector)
+        self.verifier = Verifier(self.subtractor, self.rect)
+        self.localizer = Localizer(self.rect, origin)
+        self.tracker = MultiTracker(tracker)
+
+    def learn_background(self, frame: StereoFrame) -> int:
+        """Learn the background's geometry from an empty-scene pair (any gimbal pose)."""
+        n = self.bg.learn(frame)
+        self.subtractor._maps = None
+        return n
+
+    def step(self, frame: StereoFrame) -> FrameResult:
+        ms: dict[str, float] = {}
+        t0 = time.perf_counter()
+        cands = self.subtractor.step(frame)
+        t1 = time.perf_counter()
+        blobs = [b for b in (self.verifier.verify(frame, box) for box in cands.boxes) if b is not None]
+        t2 = time.perf_counter()
+        locs = [self.localizer.locate(b.centroid_rect, b.disparity, b.disparity_sigma, b.area, frame.gimbal)
+                for b in blobs]
+        t3 = time.perf_counter()
+        obs = np.array([[b.centroid_raw[0], b.centroid_raw[1], b.disparity] for b in blobs]).reshape(-1, 3)
+        ids = self.tracker.update(frame.t, obs)
+        self.subtractor.update_floor(self._foreground_low(blobs))
+        t4 = time.perf_counter()
+        for name, a, b in zip(STAGES, (t0, t1, t2, t3), (t1, t2, t3, t4), strict=True):
+            ms[name] = (b - a) * 1e3
+        dets = tuple(Detection(b, loc, i) for b, loc, i in zip(blobs, locs, ids, strict=True))
+        pid = self.tracker.primary_id
+        primary = next((d for d in dets if d.track_id == pid), None)
+        return FrameResult(frame.index, frame.t, dets, pid, primary, ms)
+
+    def _foreground_low(self, blobs: list[Blob]) -> NDArray[np.uint8] | None:
+        if not blobs:
+            return None
+        s = self.subtractor.cfg.stride
+        low = np.zeros(self.subtractor.low_shape, np.uint8)
+        for b in blobs:
+            x0, y0, x1, y1 = b.box
+            sub = b.mask[(-y0) % s::s, (-x0) % s::s]
+            ly, lx = (y0 + s - 1) // s, (x0 + s - 1) // s
+            low[ly:ly + sub.shape[0], lx:lx + sub.shape[1]] |= sub.astype(np.uint8)
+        return low

@@ -1,0 +1,109 @@
+"""Rectification of a calibrated rig: rows become epipolar lines, disparity is horizontal.
+
+In the rectified frame both cameras share focal length f (pixels) and principal point (cx, cy), and a
+point with disparity d = x_l - x_r lies at depth z = b f / d (paper eq. 2).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from tracker.geometry import Camera, StereoRig
+
+F32 = NDArray[np.float32]
+F64 = NDArray[np.float64]
+U8 = NDArray[np.uint8]
+
+
+def _raw_grid(size: tuple[int, int]) -> F32:
+    w, h = size
+    u, v = np.meshgrid(np.arange(w, dtype=np.float32), np.arange(h, dtype=np.float32))
+    return np.dstack([u, v])
+
+
+@dataclass
+class Rectifier:
+    """Rectification maps and rectified coordinates of every raw pixel, for both cameras.
+
+    R1, R2: (3, 3) rotations from each camera frame into its rectified frame; f, cx, cy: the rectified
+    pinhole (pixels); b: baseline (m). maps[k] = (map_x, map_y) float32 (H, W): raw position sampled for
+    each rectified pixel. rect_of_raw[k]: (H, W, 2) rectified position of each raw pixel.
+    """
+
+    rig: StereoRig
+    R1: F64 = field(init=False)
+    R2: F64 = field(init=False)
+    f: float = field(init=False)
+    cx: float = field(init=False)
+    cy: float = field(init=False)
+    b: float = field(init=False)
+    maps: tuple[tuple[F32, F32], tuple[F32, F32]] = field(init=False)
+    rect_of_raw: tuple[F32, F32] = field(init=False)
+
+    def __post_init__(self) -> None:
+        L, R = self.rig.left, self.rig.right
+        R1, R2, P1, P2, _Q, _roi1, _roi2 = cv2.stereoRectify(
+            L.K, L.dist, R.K, R.dist, L.size, self.rig.R, self.rig.T.reshape(3, 1),
+            flags=cv2.CALIB_ZERO_DISPARITY, alpha=0.0)
+        self.R1, self.R2 = np.asarray(R1, float), np.asarray(R2, float)
+        self.f, self.cx, self.cy = float(P1[0, 0]), float(P1[0, 2]), float(P1[1, 2])
+        self.b = float(abs(P2[0, 3]) / P2[0, 0])
+        P = np.array([[self.f, 0.0, self.cx], [0.0, self.f, self.cy], [0.0, 0.0, 1.0]])
+        maps = []
+        rect = []
+        for cam, Rk in ((L, self.R1), (R, self.R2)):
+            mx, my = cv2.initUndistortRectifyMap(cam.K, cam.dist, Rk, P, cam.size, cv2.CV_32FC1)
+            maps.append((mx, my))
+            pts = cv2.undistortPoints(_raw_grid(cam.size).reshape(-1, 1, 2), cam.K, cam.dist, None, Rk, P,
+                                          (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 20, 1e-6))
+            rect.append(pts.reshape(cam.size[1], cam.size[0], 2).astype(np.float32))
+        self.maps = ((maps[0][0], maps[0][1]), (maps[1][0], maps[1][1]))
+        self.rect_of_raw = (rect[0], rect[1])
+
+    def rectify(self, img: U8, side: int, box: tuple[int, int, int, int] | None = None) -> U8:
+        """Rectified image of camera `side` (0 left, 1 right), or only the rectified window
+        box = (x0, y0, x1, y1) of it; bilinear."""
+        mx, my = self.maps[side]
+        if box is not None:
+            x0, y0, x1, y1 = box
+            mx, my = mx[y0:y1, x0:x1], my[y0:y1, x0:x1]
+        return np.asarray(cv2.remap(img, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE))
+
+    def rect_to_rig(self, x: float, y: float, d: float) -> F64:
+        """Rectified left point (x, y) with disparity d (px) -> rig-frame point (3,) in metres.
+
+        Paper eq. (2) in the rectified frame with the origin midway between the lens centres:
+        x = b ((x_l + x_r)/2) / (x_l - x_r), y = b ((y_l + y_r)/2) / (x_l - x_r), z = b f / (x_l - x_r).
+        (The paper prints y_l - y_r in the second denominator; the disparity x_l - x_r is meant.)"""
+        xl, xr, yl = x - self.cx, x - d - self.cx, y - self.cy
+        X_mid = np.array([self.b * 0.5 * (xl + xr) / d, self.b * yl / d, self.b * self.f / d])
+        X_rect_left = X_mid + np.array([self.b / 2.0, 0.0, 0.0])  # origin at the left lens centre
+        L = self.rig.left
+        return np.asarray(L.R_rc.T @ (self.R1.T @ X_rect_left) + L.c)
+
+    def rig_to_rect_jacobian(self, x: float, y: float, d: float) -> F64:
+        """∂X_rig/∂(x, y, d), shape (3, 3), for propagating pixel and disparity variances."""
+        b, f = self.b, self.f
+        J_rect = np.array([[b / d, 0.0, -b * (x - self.cx) / d**2],
+                           [0.0, b / d, -b * (y - self.cy) / d**2],
+                           [0.0, 0.0, -b * f / d**2]])
+        return np.asarray(self.rig.left.R_rc.T @ self.R1.T @ J_rect)
+
+    def rig_to_rect(self, X_rig: F64) -> tuple[F64, F64, F64]:
+        """Rig-frame points (N, 3) -> rectified left x, y and disparity d (each (N,))."""
+        L = self.rig.left
+        Xr = ((X_rig - L.c) @ L.R_rc.T) @ self.R1.T
+        x = self.f * Xr[:, 0] / Xr[:, 2] + self.cx
+        y = self.f * Xr[:, 1] / Xr[:, 2] + self.cy
+        return x, y, self.f * self.b / Xr[:, 2]
+
+    def raw_of_rect(self, side: int, x: F64, y: F64) -> tuple[F64, F64]:
+        """Rectified points of camera `side` -> its raw (distorted) pixel coordinates."""
+        cam: Camera = self.rig.left if side == 0 else self.rig.right
+        Rk = self.R1 if side == 0 else self.R2
+        m = np.stack([(x - self.cx) / self.f, (y - self.cy) / self.f, np.ones_like(x)], axis=-1) @ Rk
+        return cam.distort_normalized(m[..., 0] / m[..., 2], m[..., 1] / m[..., 2])
