@@ -45,7 +45,8 @@ class ServoDriver(Protocol):
     `fault` is None when healthy, else a one-line reason. `close` releases the port (idempotent).
     """
 
-    fault: str | None
+    @property
+    def fault(self) -> str | None: ...
 
     def command(self, pan_deg: float, tilt_deg: float) -> None: ...
 
