@@ -96,7 +96,10 @@ class BAResult:
     @property
     def view_rms(self) -> F64:
         """RMS reprojection error per camera and view (C, V) px, NaN where the view is unseen."""
-        out: F64 = np.sqrt(np.nanmean(np.sum(self.residuals**2, axis=-1), axis=-1))
+        sq = np.sum(self.residuals**2, axis=-1)  # (C, V, N), NaN rows for unseen views
+        seen = ~np.isnan(sq[..., 0])
+        out: F64 = np.full(seen.shape, np.nan)
+        out[seen] = np.sqrt(np.mean(sq[seen], axis=-1))
         return out
 
     @property
