@@ -85,17 +85,24 @@ class StereoSubtractor:
         self._count = 0
         self.moving = False
         self._pending: tuple[U8, bool] | None = None
+        self.static_floors: dict[tuple[float, float], tuple[U8, U8]] = {}
+        self.left_bg: dict[tuple[float, float], NDArray[np.float32]] = {}  # temporal model, gain 1
+        self._stripe = 0
 
     # -- correspondence maps ----------------------------------------------------------------------
     def maps(self, gimbal: GimbalState | None) -> _PoseMaps:
         g = gimbal or GimbalState()
-        pose = (round(g.pan_deg, 4), round(g.tilt_deg, 4))
+        pose = self._pose(g)
         if self._maps is None or self._maps.pose != pose:
             low = self.bg.correspondence(0, g, step=self.cfg.stride)
             mx = np.where(low.valid, low.map_x, -10.0).astype(np.float32)
             fixed = cv2.convertMaps(mx, low.map_y, cv2.CV_16SC2, nninterpolation=True)
             self._maps = _PoseMaps(pose, low, (fixed[0], fixed[1]))
         return self._maps
+
+    def reset_maps(self) -> None:
+        """Forget cached correspondence maps (after the background geometry changed)."""
+        self._maps = None
 
     def correspondence(self, key: int, gimbal: GimbalState | None, box: Box) -> CorrespondenceMap:
         """Full-resolution correspondence for the pixels in `box` of camera `key`. While the pose stays,
@@ -110,6 +117,56 @@ class StereoSubtractor:
         x0, y0, x1, y1 = box
         sl = (slice(y0, y1), slice(x0, x1))
         return CorrespondenceMap(full.map_x[sl], full.map_y[sl], full.valid[sl], full.disparity[sl])
+
+    def prime(self, frame: StereoFrame) -> None:
+        """Learn the residual of an empty-scene pair at its pose, for both keys: where the background warp
+        is imperfect (half-occlusions next to depth edges, aliasing), eq. (9) would fire on the
+        background itself. It becomes the floor of the right key's mask and the temporal floor's start."""
+        pose = self._pose(frame.gimbal)
+        floors = []
+        for key, (img_k, img_o) in enumerate(((frame.left, frame.right), (frame.right, frame.left))):
+            cm = self.bg.correspondence(key, frame.gimbal)
+            ref = cv2.remap(img_o, cm.map_x, cm.map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+            resid = cv2.subtract(cv2.absdiff(img_k, ref), 3)  # less about the noise level
+            floors.append(cv2.dilate(resid, np.ones((3, 3), np.uint8)))
+        self.static_floors[pose] = (floors[0], floors[1])
+        self.left_bg[pose] = frame.left.astype(np.float32)
+        s = self.cfg.stride
+        if pose == self._pose(None):
+            self.floor = np.ascontiguousarray(floors[0][::s, ::s])
+
+    def static_floor(self, key: int, gimbal: GimbalState | None, box: Box) -> U8 | None:
+        """The primed residual floor of camera `key` inside `box`, if the cameras are at a primed pose."""
+        floors = None if self.moving else self.static_floors.get(self._pose(gimbal))
+        if floors is None:
+            return None
+        x0, y0, x1, y1 = box
+        return np.asarray(floors[key][y0:y1, x0:x1])
+
+    @staticmethod
+    def _pose(gimbal: GimbalState | None) -> tuple[float, float]:
+        g = gimbal or GimbalState()
+        return (round(g.pan_deg, 4), round(g.tilt_deg, 4))
+
+    def left_background(self, gimbal: GimbalState | None) -> NDArray[np.float32] | None:
+        """The left camera's temporal background image at this pose (None while moving)."""
+        return None if self.moving else self.left_bg.get(self._pose(gimbal))
+
+    def update_left_background(self, frame: StereoFrame, objects: NDArray[np.bool_] | None,
+                               gain: float, stripes: int = 16, alpha: float = 0.25) -> None:
+        """Adapt the temporal background B ← B + α (Γ/g - B) on one horizontal stripe per frame (each
+        row every `stripes` frames), away from objects; g is the global gain of this frame."""
+        bg = self.left_background(frame.gimbal)
+        if bg is None:
+            return
+        h = bg.shape[0]
+        k = self._stripe % stripes
+        self._stripe += 1
+        y0, y1 = k * h // stripes, (k + 1) * h // stripes
+        cur = frame.left[y0:y1].astype(np.float32) * np.float32(1.0 / max(gain, 1e-3))
+        keep = None if objects is None else objects[y0:y1]
+        upd = bg[y0:y1] + np.float32(alpha) * (cur - bg[y0:y1])
+        bg[y0:y1] = upd if keep is None else np.where(keep, bg[y0:y1], upd)
 
     def floor_at(self, box: Box) -> U8:
         """The temporal floor B upsampled (nearest) to the full-resolution pixels of `box`."""

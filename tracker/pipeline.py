@@ -69,11 +69,13 @@ class Pipeline:
         self.verifier = Verifier(self.subtractor, self.rect)
         self.localizer = Localizer(self.rect, origin)
         self.tracker = MultiTracker(tracker)
+        self._last_gain = 1.0
 
     def learn_background(self, frame: StereoFrame) -> int:
         """Learn the background's geometry from an empty-scene pair (any gimbal pose)."""
         n = self.bg.learn(frame)
-        self.subtractor._maps = None
+        self.subtractor.reset_maps()
+        self.subtractor.prime(frame)
         return n
 
     def step(self, frame: StereoFrame) -> FrameResult:
@@ -89,6 +91,11 @@ class Pipeline:
         obs = np.array([[b.centroid_raw[0], b.centroid_raw[1], b.disparity] for b in blobs]).reshape(-1, 3)
         ids = self.tracker.update(frame.t, obs)
         self.subtractor.update_floor(self._foreground_low(blobs))
+        gain = float(np.median([b.gain for b in blobs])) if blobs else self._last_gain
+        self._last_gain = gain
+        fg_full = FrameResult(frame.index, frame.t, tuple(Detection(b, locs[0], -1) for b in blobs), None,
+                              None).foreground_mask(frame.left.shape) if blobs else None
+        self.subtractor.update_left_background(frame, fg_full, gain)
         t4 = time.perf_counter()
         for name, a, b in zip(STAGES, (t0, t1, t2, t3), (t1, t2, t3, t4), strict=True):
             ms[name] = (b - a) * 1e3

@@ -40,6 +40,7 @@ class Blob:
     disparity_sigma: float
     bg_disparity: float
     score: float
+    gain: float = 1.0
 
 
 def _key_mask(key: U8, other: U8, mx: NDArray[np.float32], my: NDArray[np.float32], valid: BoolA,
@@ -52,7 +53,7 @@ def _key_mask(key: U8, other: U8, mx: NDArray[np.float32], my: NDArray[np.float3
     return np.asarray((resid > eps) & valid)
 
 
-_CLOSE = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (7, 7))
+_CLOSE = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
 
 
 def _largest(mask: BoolA, close: bool = False) -> BoolA:
@@ -68,6 +69,21 @@ def _largest(mask: BoolA, close: bool = False) -> BoolA:
     out = np.zeros(mask.shape, np.uint8)
     cv2.drawContours(out, [best], -1, 1, thickness=cv2.FILLED)
     return out.astype(bool)
+
+
+_RING = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (7, 7))
+
+
+def _temporal_outline(key: U8, bg: NDArray[np.float32], solid: BoolA, eps: int) -> tuple[BoolA, float]:
+    """The object's exact outline from the temporal model, inside the stereo-verified region.
+
+    The global gain g is the median ratio Γ/B on the box's background ring; then |Γ - g B| > ε.
+    Returns the mask and g (1.0 when the ring is too small)."""
+    near = cv2.dilate(solid.astype(np.uint8), _RING) > 0
+    ring = ~near & (bg > 8.0)
+    g = float(np.median(key[ring] / bg[ring])) if int(ring.sum()) >= 20 else 1.0
+    diff = np.abs(key.astype(np.float32) - np.float32(g) * bg) > eps
+    return _largest(diff & near, close=True), g
 
 
 class Verifier:
@@ -93,6 +109,10 @@ class Verifier:
             return None
         d0 = coarse[0]
         obj = _largest(m_left & self._right_key_at(frame, box, d0))
+        bg = self.sub.left_background(frame.gimbal)
+        gain = 1.0
+        if bg is not None:
+            obj, gain = _temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1], obj, cfg.epsilon)
         area = int(obj.sum())
         if area < cfg.min_area_px:
             return None
@@ -107,7 +127,7 @@ class Verifier:
         d_bg = float(np.median(cm.disparity[ys, xs]))
         if d < d_bg * (1.0 + cfg.min_depth_gap) + cfg.min_disparity_gap_px:
             return None  # not in front of the background: a misregistered background patch
-        return Blob(box, obj, area, c_raw, c_rect, d, sigma, d_bg, score)
+        return Blob(box, obj, area, c_raw, c_rect, d, sigma, d_bg, score, gain)
 
     def _right_key_at(self, frame: StereoFrame, box: Box, d: float) -> BoolA:
         """The right-key mask of eq. (9), sampled at the left box's pixels shifted by disparity d."""
@@ -122,8 +142,9 @@ class Verifier:
             return np.zeros((y1 - y0, x1 - x0), bool)
         rbox = (bx0, by0, bx1, by1)
         cm = self.sub.correspondence(1, frame.gimbal, rbox)
+        floor = self.sub.static_floor(1, frame.gimbal, rbox)
         m_right = _largest(_key_mask(frame.right[by0:by1, bx0:bx1], frame.left, cm.map_x, cm.map_y,
-                                     cm.valid, self.cfg.epsilon, None), close=True).astype(np.float32)
+                                     cm.valid, self.cfg.epsilon, floor), close=True).astype(np.float32)
         sampled = cv2.remap(m_right, (ur - bx0).astype(np.float32), (vr - by0).astype(np.float32),
                             cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
         return np.asarray(sampled >= 0.5)

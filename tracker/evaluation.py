@@ -1,0 +1,201 @@
+"""Accuracy of the pipeline against the simulated rig's ground truth (`tmeye eval`)."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from tracker.detect import DetectorConfig
+from tracker.geometry import StereoRig
+from tracker.localize import spherical
+from tracker.pipeline import FrameResult, Pipeline
+from tracker.sim.render import FrameTruth
+from tracker.sim.scenarios import SimRig, get_scenario
+
+F64 = NDArray[np.float64]
+Progress = Callable[[int, int], None]
+
+
+@dataclass(frozen=True)
+class EvalReport:
+    """Figures of one scenario run. Angles in degrees, lengths in metres unless named _px or _pct."""
+
+    scenario: str
+    seed: int
+    frames: int
+    visible_frames: int
+    detection_rate: float
+    false_target_frames: int
+    id_switches: int
+    pixel_f1: float
+    centroid_rmse_px: float
+    disparity_rmse_px: float
+    range_rmse_m: float
+    range_bias_pct: float
+    range_limit_m: float
+    azimuth_rmse_deg: float
+    elevation_rmse_deg: float
+    step_ms_median: float
+    render_ms_median: float
+    extra: dict[str, float] = field(default_factory=dict)
+
+    def to_json(self) -> dict[str, object]:
+        d = asdict(self)
+        extra = d.pop("extra")
+        d.update(extra)
+        return {k: (round(v, 6) if isinstance(v, float) else v) for k, v in d.items()}
+
+
+@dataclass
+class _Acc:
+    """Running sums over frames."""
+
+    visible: int = 0
+    detected: int = 0
+    false_target: int = 0
+    id_switches: int = 0
+    last_primary: int | None = None
+    tp: int = 0
+    fp: int = 0
+    fn: int = 0
+    cen: list[float] = field(default_factory=list)
+    disp: list[float] = field(default_factory=list)
+    rng: list[float] = field(default_factory=list)
+    rng_rel: list[float] = field(default_factory=list)
+    limit: list[float] = field(default_factory=list)
+    az: list[float] = field(default_factory=list)
+    el: list[float] = field(default_factory=list)
+    f1_frames: list[float] = field(default_factory=list)
+    step_ms: list[float] = field(default_factory=list)
+    render_ms: list[float] = field(default_factory=list)
+
+
+def _rms(v: list[float]) -> float:
+    return float(np.sqrt(np.mean(np.square(v)))) if v else float("nan")
+
+
+def _f1(tp: int, fp: int, fn: int) -> float:
+    return 2 * tp / max(2 * tp + fp + fn, 1)
+
+
+def score_frame(acc: _Acc, res: FrameResult, truth: FrameTruth, pipe: Pipeline, min_area: int) -> None:
+    """Add one frame's figures to the running sums."""
+    fg_truth = truth.ids_left > 0
+    fg = res.foreground_mask(fg_truth.shape)
+    tp = int(np.count_nonzero(fg & fg_truth))
+    fp = int(np.count_nonzero(fg & ~fg_truth))
+    fn = int(np.count_nonzero(~fg & fg_truth))
+    acc.tp, acc.fp, acc.fn = acc.tp + tp, acc.fp + fp, acc.fn + fn
+    acc.f1_frames.append(_f1(tp, fp, fn) if tp + fp + fn else 1.0)
+    tt = truth.target(1)
+    visible = tt is not None and tt.centroid_left is not None and tt.area_left >= min_area
+    prim = res.primary
+    if prim is not None:
+        near = [o for o in truth.targets if o.centroid_left is not None
+                and np.hypot(*(prim.blob.centroid_raw - o.centroid_left)) < max(4.0, np.sqrt(o.area_left) / 2)]
+        if not near:
+            acc.false_target += 1
+        if acc.last_primary is not None and res.primary_id != acc.last_primary:
+            acc.id_switches += 1
+        acc.last_primary = res.primary_id
+    if not visible or tt is None or tt.centroid_left is None:
+        return
+    acc.visible += 1
+    if prim is None or np.hypot(*(prim.blob.centroid_raw - tt.centroid_left)) > max(4.0, np.sqrt(tt.area_left) / 2):
+        return
+    acc.detected += 1
+    rect = pipe.rect
+    _, _, d_true = rect.rig_to_rect(tt.rig[None, :])
+    r_t, th_t, ph_t = spherical(tt.world - pipe.localizer.origin)
+    loc = prim.loc
+    acc.cen.append(float(np.hypot(*(prim.blob.centroid_raw - tt.centroid_left))))
+    acc.disp.append(prim.blob.disparity - float(d_true[0]))
+    acc.rng.append(loc.r - r_t)
+    acc.rng_rel.append((loc.r - r_t) / r_t)
+    z = float(tt.rig[2])
+    acc.limit.append(z * z * 0.1 / (rect.b * rect.f))
+    acc.az.append(float(np.degrees(np.angle(np.exp(1j * (loc.theta - th_t))))))
+    acc.el.append(float(np.degrees(loc.phi - ph_t)))
+
+
+def run_scenario(name: str, frames: int | None = None, seed: int = 0, rig: StereoRig | None = None,
+                 detector: DetectorConfig | None = None, progress: Progress | None = None) -> EvalReport:
+    """Run the pipeline on a scenario and score it. `rig`: the calibration the pipeline uses (default:
+    the simulator's true rig); the simulator always renders through its true rig."""
+    scenario = get_scenario(name)
+    if scenario.closed_loop:
+        raise ValueError(f"scenario {name!r} is closed-loop: run it with the servo evaluation")
+    sim = SimRig(scenario, seed=seed)
+    pipe = Pipeline(rig or sim.rig, detector)
+    for g in survey_poses(scenario):
+        pipe.learn_background(sim.background(g))
+    n = min(frames or scenario.frames, scenario.frames)
+    acc = _Acc()
+    min_area = pipe.subtractor.cfg.min_area_px
+    for i in range(n):
+        t0 = time.perf_counter()
+        sf = sim.step()
+        t1 = time.perf_counter()
+        res = pipe.step(sf.frame)
+        t2 = time.perf_counter()
+        acc.render_ms.append((t1 - t0) * 1e3)
+        acc.step_ms.append((t2 - t1) * 1e3)
+        score_frame(acc, res, sf.truth, pipe, min_area)
+        if progress is not None:
+            progress(i + 1, n)
+    return _report(name, seed, n, acc, scenario.gain)
+
+
+def survey_poses(scenario: object) -> list[object]:
+    """Gimbal poses at which the background is learnt before a run: home, plus a sweep when the
+    scenario moves the cameras."""
+    from tracker.frames import GimbalState
+    from tracker.sim.scenarios import Scenario
+
+    assert isinstance(scenario, Scenario)
+    poses = {(round(scenario.gimbal(t).pan_deg, 3), round(scenario.gimbal(t).tilt_deg, 3))
+             for t in np.arange(0.0, scenario.frames / scenario.fps, 0.5)}
+    if len(poses) == 1:
+        return [GimbalState(*poses.pop())]
+    return [GimbalState(p, t) for p in (-16.0, -8.0, 0.0, 8.0, 16.0) for t in (-4.0, 0.0, 4.0)]
+
+
+def _report(name: str, seed: int, n: int, acc: _Acc, gain: Callable[[float], float]) -> EvalReport:
+    extra: dict[str, float] = {}
+    steps = [i for i in range(1, n) if abs(gain(i / 30.0) - gain((i - 1) / 30.0)) > 0.05]
+    if steps:
+        at = [acc.f1_frames[j] for i in steps for j in (i, i + 1) if j < n]
+        extra["pixel_f1_at_steps_min"] = float(min(at))
+    return EvalReport(
+        scenario=name, seed=seed, frames=n, visible_frames=acc.visible,
+        detection_rate=acc.detected / max(acc.visible, 1), false_target_frames=acc.false_target,
+        id_switches=acc.id_switches, pixel_f1=_f1(acc.tp, acc.fp, acc.fn),
+        centroid_rmse_px=_rms(acc.cen), disparity_rmse_px=_rms(acc.disp), range_rmse_m=_rms(acc.rng),
+        range_bias_pct=float(np.mean(acc.rng_rel) * 100) if acc.rng_rel else float("nan"),
+        range_limit_m=float(np.mean(acc.limit)) if acc.limit else float("nan"),
+        azimuth_rmse_deg=_rms(acc.az), elevation_rmse_deg=_rms(acc.el),
+        step_ms_median=float(np.median(acc.step_ms)), render_ms_median=float(np.median(acc.render_ms)),
+        extra=extra)
+
+
+def mog2_f1(name: str, frames: int | None = None, seed: int = 0) -> float:
+    """Pixel F1 of OpenCV's MOG2 on the left images of a scenario, for comparison."""
+    scenario = get_scenario(name)
+    sim = SimRig(scenario, seed=seed)
+    mog = cv2.createBackgroundSubtractorMOG2(detectShadows=False)
+    for _ in range(30):
+        mog.apply(sim.background().left)
+    tp = fp = fn = 0
+    for _ in range(min(frames or scenario.frames, scenario.frames)):
+        sf = sim.step()
+        fg = mog.apply(sf.frame.left) > 0
+        truth = sf.truth.ids_left > 0
+        tp += int(np.count_nonzero(fg & truth))
+        fp += int(np.count_nonzero(fg & ~truth))
+        fn += int(np.count_nonzero(~fg & truth))
+    return _f1(tp, fp, fn)
