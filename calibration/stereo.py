@@ -53,7 +53,8 @@ class ViewSet:
 class StereoCalibration:
     """Result of calibrate_stereo. ba: final adjustment over `names` views; rig: cameras for the tracker
     (Brown-Conrady); rect: rectification and row error; coverage (left, right) of the image area 0-1;
-    polynomial: the eq. (3)-(4) lenses fitted on the same views (None if not enough distances)."""
+    polynomial: the eq. (3)-(4) lenses fitted on the same views (None if not enough distances);
+    observed (2, V, N, 2): the corners the adjustment used (NaN where unseen)."""
 
     board: BoardSpec
     size: tuple[int, int]
@@ -66,6 +67,7 @@ class StereoCalibration:
     coverage: tuple[float, float]
     stereo_rms_px: float
     polynomial: tuple[PolynomialLens, PolynomialLens] | None
+    observed: F64
     polynomial_error: str = ""
 
 
@@ -164,5 +166,5 @@ def _finish(views: ViewSet, board: BoardSpec, ba: BAResult, rejected: list[Skip]
         poly, poly_err = None, str(exc)
     return StereoCalibration(
         board, views.size, ba, list(views.names), rejected, list(views.skipped), rig, rect,
-        (cov[0], cov[1]), stereo_rms, poly, poly_err,
+        (cov[0], cov[1]), stereo_rms, poly, views.obs, poly_err,
     )
