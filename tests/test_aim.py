@@ -151,11 +151,6 @@ def test_time_must_not_go_backwards() -> None:
         ctrl.step(AimInput(0.5))
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="tracker.geometry.rot_x is the transpose of what its docstring says: gimbal_rotation(0, +10) "
-    "looks DOWN (+y) although tilt + must look up; fix geometry.py, then remove this marker",
-)
 def test_gimbal_rotation_points_the_optical_axis_where_aim_angles_aims() -> None:
     p = np.array([3.0, -2.0, 8.0])
     pan, tilt = aim_angles(p)

@@ -61,7 +61,7 @@ def rot_y(angle: float) -> F64:
 def rot_x(angle: float) -> F64:
     """Rotation about the x (right) axis by `angle` radians: positive turns +z towards -y (tilt up)."""
     c, s = np.cos(angle), np.sin(angle)
-    return np.array([[1.0, 0.0, 0.0], [0.0, c, s], [0.0, -s, c]])
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
 
 
 def gimbal_rotation(pan_deg: float, tilt_deg: float) -> F64:
