@@ -8,6 +8,7 @@ STAMP := $(VENV)/.installed
 .PHONY: setup run test lint typecheck unit clean
 
 $(STAMP): pyproject.toml
+	@$(PY) -c "import venv, ensurepip" 2>/dev/null || (apt-get update && apt-get install -y python3-venv)
 	$(PY) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
 	$(BIN)/pip install --quiet -e '.[dev]'

@@ -6,12 +6,12 @@ import argparse
 import importlib
 import sys
 
+from tmeye.errors import UserError
+
+__all__ = ["UserError", "build_parser", "main"]
+
 # Sub-command modules, each with register(subparsers) setting `func` on its parser.
 COMMANDS = ("track", "eval", "bench", "calibrate")
-
-
-class UserError(Exception):
-    """An input problem the user can fix: printed as one line, exit status 2."""
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -39,7 +39,3 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         return 130
     return int(code or 0)
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

@@ -69,12 +69,14 @@ class BackgroundDepth:
         rect = self.rect
         lr, rr = rect.rectify(frame.left, 0), rect.rectify(frame.right, 1)
         nd = max_disparity or int(16 * np.ceil(rect.f * rect.b / 2.5 / 16))
-        sgbm = cv2.StereoSGBM_create(minDisparity=0, numDisparities=nd, blockSize=5, P1=8 * 25, P2=32 * 25,
+        sgbm = cv2.StereoSGBM.create(minDisparity=0, numDisparities=nd, blockSize=5, P1=8 * 25, P2=32 * 25,
                                      disp12MaxDiff=1, uniquenessRatio=5, speckleWindowSize=100,
                                      speckleRange=2, mode=cv2.STEREO_SGBM_MODE_HH)
         # pad on the left so that the first `nd` columns get a disparity search too
-        pad = lambda img: cv2.copyMakeBorder(img, 0, 0, nd, 0, cv2.BORDER_REPLICATE)  # noqa: E731
-        disp = sgbm.compute(pad(lr), pad(rr))[:, nd:].astype(np.float32) / 16.0
+        def pad(img: U8) -> U8:
+            return np.asarray(cv2.copyMakeBorder(img, 0, 0, nd, 0, cv2.BORDER_REPLICATE), np.uint8)
+
+        disp = np.asarray(sgbm.compute(pad(lr), pad(rr)))[:, nd:].astype(np.float32) / 16.0
         ys, xs = np.nonzero(disp > 0.5)
         d = disp[ys, xs].astype(np.float64)
         X_rig = self._rect_points_to_rig(xs.astype(np.float64), ys.astype(np.float64), d)
@@ -138,8 +140,7 @@ class BackgroundDepth:
         mx, my = cam_r.distort_normalized(Xc[..., 0] / z, Xc[..., 1] / z)
         W, H = cam_r.size
         valid &= (z > 0) & (mx >= 0) & (my >= 0) & (mx <= W - 1) & (my <= H - 1)
-        Xl = X if key == 0 else None
-        disp = self._disparity(Xl if Xl is not None else X)
+        disp = self._disparity(X.astype(np.float32))  # X is in the rig frame whichever camera is key
         return CorrespondenceMap(mx.astype(np.float32), my.astype(np.float32), valid, disp)
 
     def _disparity(self, X_rig: F32) -> F32:

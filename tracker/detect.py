@@ -57,7 +57,7 @@ class _PoseMaps:
 
     pose: tuple[float, float]
     low: CorrespondenceMap
-    low_fixed: tuple[NDArray[np.int16], NDArray[np.uint16]]
+    low_fixed: NDArray[np.int16]
     full: dict[int, CorrespondenceMap] = field(default_factory=dict)
 
 
@@ -80,6 +80,7 @@ class StereoSubtractor:
         s = self.cfg.stride
         self.low_shape = ((h + s - 1) // s, (w + s - 1) // s)
         self.floor = np.zeros(self.low_shape, np.uint8)  # B, the temporal residual floor
+        self._ones = np.ones(self.low_shape, np.uint8)
         self._maps: _PoseMaps | None = None
         self._fg_every = max(1, round(self.cfg.absorb_s * self.cfg.fps / 100.0))
         self._count = 0
@@ -97,7 +98,7 @@ class StereoSubtractor:
             low = self.bg.correspondence(0, g, step=self.cfg.stride)
             mx = np.where(low.valid, low.map_x, -10.0).astype(np.float32)
             fixed = cv2.convertMaps(mx, low.map_y, cv2.CV_16SC2, nninterpolation=True)
-            self._maps = _PoseMaps(pose, low, (fixed[0], fixed[1]))
+            self._maps = _PoseMaps(pose, low, np.asarray(fixed[0], np.int16))  # (h, w, 2) nearest pixels
         return self._maps
 
     def reset_maps(self) -> None:
@@ -127,8 +128,9 @@ class StereoSubtractor:
         for key, (img_k, img_o) in enumerate(((frame.left, frame.right), (frame.right, frame.left))):
             cm = self.bg.correspondence(key, frame.gimbal)
             ref = cv2.remap(img_o, cm.map_x, cm.map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-            resid = cv2.subtract(cv2.absdiff(img_k, ref), 3)  # less about the noise level
-            floors.append(cv2.dilate(resid, np.ones((3, 3), np.uint8)))
+            resid = np.asarray(cv2.absdiff(img_k, ref), np.uint8)
+            resid = np.asarray(cv2.subtract(resid, np.full_like(resid, 3)), np.uint8)  # less the noise level
+            floors.append(np.asarray(cv2.dilate(resid, np.ones((3, 3), np.uint8)), np.uint8))
         self.static_floors[pose] = (floors[0], floors[1])
         self.left_bg[pose] = frame.left.astype(np.float32)
         s = self.cfg.stride
@@ -189,10 +191,10 @@ class StereoSubtractor:
         self.moving = moving
         s = self.cfg.stride
         key = frame.left[::s, ::s] if s > 1 else frame.left
-        ref = cv2.remap(frame.right, pm.low_fixed[0], pm.low_fixed[1], cv2.INTER_NEAREST)
-        resid = cv2.absdiff(key, ref)  # |Γ(x, y) - Θ(x', y')|, eq. (9)
+        ref = cv2.remap(frame.right, pm.low_fixed, None, cv2.INTER_NEAREST)  # type: ignore[call-overload]
+        resid = np.asarray(cv2.absdiff(key, ref), np.uint8)  # |Γ(x, y) - Θ(x', y')|, eq. (9)
         excess = cv2.subtract(resid, self.floor)
-        _, fg = cv2.threshold(excess, self.cfg.epsilon, 255, cv2.THRESH_BINARY)
+        fg = np.asarray(cv2.threshold(excess, self.cfg.epsilon, 255, cv2.THRESH_BINARY)[1], np.uint8)
         fg[~pm.low.valid] = 0
         boxes = self._boxes(fg)
         cv2.min(self.floor, resid, dst=self.floor)  # the floor falls at once
@@ -228,4 +230,4 @@ class StereoSubtractor:
         up = cv2.compare(resid, self.floor, cv2.CMP_GT)
         if foreground_low is not None and self._count % self._fg_every:
             up[foreground_low > 0] = 0
-        cv2.add(self.floor, 1, dst=self.floor, mask=up)
+        cv2.add(self.floor, self._ones, dst=self.floor, mask=up)

@@ -11,6 +11,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tracker.detect import DetectorConfig
+from tracker.frames import GimbalState
 from tracker.geometry import StereoRig
 from tracker.localize import spherical
 from tracker.pipeline import FrameResult, Pipeline
@@ -151,10 +152,9 @@ def run_scenario(name: str, frames: int | None = None, seed: int = 0, rig: Stere
     return _report(name, seed, n, acc, scenario.gain)
 
 
-def survey_poses(scenario: object) -> list[object]:
+def survey_poses(scenario: object) -> list[GimbalState]:
     """Gimbal poses at which the background is learnt before a run: home, plus a sweep when the
     scenario moves the cameras."""
-    from tracker.frames import GimbalState
     from tracker.sim.scenarios import Scenario
 
     assert isinstance(scenario, Scenario)

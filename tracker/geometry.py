@@ -126,7 +126,7 @@ class Camera:
         xn, yn = self.undistort_pixels(u, v)
         d = np.stack([xn, yn, np.ones_like(xn)], axis=-1)
         d = d / np.linalg.norm(d, axis=-1, keepdims=True)
-        return d @ self.R_rc  # R_rc.T applied to row vectors
+        return np.asarray(d @ self.R_rc, dtype=np.float64)  # R_rc.T applied to row vectors
 
     def to_dict(self) -> dict[str, object]:
         return {

@@ -25,6 +25,14 @@ def _raw_grid(size: tuple[int, int]) -> F32:
     return np.dstack([u, v])
 
 
+def _pixel_areas(rect: F32) -> F32:
+    """Area (rectified px²) of each raw pixel: |det ∂(x_rect, y_rect)/∂(u, v)| by central differences.
+    Centroids in rectified coordinates weight pixels by it (the lens stretches the pixel grid)."""
+    gx = np.gradient(rect, axis=1)
+    gy = np.gradient(rect, axis=0)
+    return np.asarray(np.abs(gx[..., 0] * gy[..., 1] - gx[..., 1] * gy[..., 0]), np.float32)
+
+
 @dataclass
 class Rectifier:
     """Rectification maps and rectified coordinates of every raw pixel, for both cameras.
@@ -43,6 +51,7 @@ class Rectifier:
     b: float = field(init=False)
     maps: tuple[tuple[F32, F32], tuple[F32, F32]] = field(init=False)
     rect_of_raw: tuple[F32, F32] = field(init=False)
+    area_of_raw: F32 = field(init=False)
 
     def __post_init__(self) -> None:
         L, R = self.rig.left, self.rig.right
@@ -61,8 +70,10 @@ class Rectifier:
             pts = cv2.undistortPoints(_raw_grid(cam.size).reshape(-1, 1, 2), cam.K, cam.dist, None, Rk, P,
                                           (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 20, 1e-6))
             rect.append(pts.reshape(cam.size[1], cam.size[0], 2).astype(np.float32))
-        self.maps = ((maps[0][0], maps[0][1]), (maps[1][0], maps[1][1]))
+        f32 = [(np.asarray(mx, np.float32), np.asarray(my, np.float32)) for mx, my in maps]
+        self.maps = (f32[0], f32[1])
         self.rect_of_raw = (rect[0], rect[1])
+        self.area_of_raw = _pixel_areas(rect[0])
 
     def rectify(self, img: U8, side: int, box: tuple[int, int, int, int] | None = None) -> U8:
         """Rectified image of camera `side` (0 left, 1 right), or only the rectified window

@@ -61,7 +61,7 @@ def _largest(mask: BoolA, close: bool = False) -> BoolA:
     holes are sealed first (a morphological closing), so the holes are filled too."""
     m8 = mask.astype(np.uint8)
     if close:
-        m8 = cv2.morphologyEx(m8, cv2.MORPH_CLOSE, _CLOSE) | m8
+        m8 = np.asarray(cv2.morphologyEx(m8, cv2.MORPH_CLOSE, _CLOSE), np.uint8) | m8
     contours, _ = cv2.findContours(m8, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     if not contours:
         return np.zeros_like(mask)
@@ -71,7 +71,8 @@ def _largest(mask: BoolA, close: bool = False) -> BoolA:
     return out.astype(bool)
 
 
-_RING = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (7, 7))
+_RING = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (9, 9))
+_NEAR = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
 
 
 def _temporal_outline(key: U8, bg: NDArray[np.float32], solid: BoolA, eps: int) -> tuple[BoolA, float]:
@@ -79,8 +80,9 @@ def _temporal_outline(key: U8, bg: NDArray[np.float32], solid: BoolA, eps: int) 
 
     The global gain g is the median ratio Γ/B on the box's background ring; then |Γ - g B| > ε.
     Returns the mask and g (1.0 when the ring is too small)."""
-    near = cv2.dilate(solid.astype(np.uint8), _RING) > 0
-    ring = ~near & (bg > 8.0)
+    s8 = solid.astype(np.uint8)
+    near = cv2.dilate(s8, _NEAR) > 0  # the stereo outline is good to a pixel or two
+    ring = (cv2.dilate(s8, _RING) == 0) & (bg > 8.0)
     g = float(np.median(key[ring] / bg[ring])) if int(ring.sum()) >= 20 else 1.0
     diff = np.abs(key.astype(np.float32) - np.float32(g) * bg) > eps
     return _largest(diff & near, close=True), g
@@ -121,8 +123,9 @@ class Verifier:
             return None
         d, sigma, score = fine
         ys, xs = np.nonzero(obj)
-        rc = rect.rect_of_raw[0][y0:y1, x0:x1][ys, xs]
-        c_rect = rc.mean(axis=0).astype(np.float64)
+        rc = rect.rect_of_raw[0][y0:y1, x0:x1][ys, xs].astype(np.float64)
+        a = rect.area_of_raw[y0:y1, x0:x1][ys, xs].astype(np.float64)
+        c_rect = (a[:, None] * rc).sum(axis=0) / a.sum()  # eq. (10) in rectified coordinates
         c_raw = np.array([xs.mean() + x0, ys.mean() + y0])  # eq. (10), c(i, j) = the object mask
         d_bg = float(np.median(cm.disparity[ys, xs]))
         if d < d_bg * (1.0 + cfg.min_depth_gap) + cfg.min_disparity_gap_px:

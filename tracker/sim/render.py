@@ -15,7 +15,7 @@ from numpy.typing import NDArray
 
 from tracker.frames import GimbalState, StereoFrame
 from tracker.geometry import Camera, StereoRig, gimbal_rotation
-from tracker.sim.scene import MovingObject, Surface
+from tracker.sim.scene import Surface
 
 F64 = NDArray[np.float64]
 F32 = NDArray[np.float32]
@@ -94,8 +94,9 @@ def _cast_plane_fast(view: _View, R_wr: F64, s: Surface, img: F32, depth: F32) -
     H = np.vstack([q * u_c / s.texel_m + (a0 / s.texel_m + tw / 2.0) * n_c,
                    q * v_c / s.texel_m + (b0 / s.texel_m + th / 2.0) * n_c, n_c])
     xy = view.xy[y0:y1, x0:x1]
-    mxy = cv2.perspectiveTransform(xy.reshape(-1, 1, 2), H).reshape(xy.shape)
-    val = cv2.remap(s._tex32, mxy, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT101)
+    mxy = np.asarray(cv2.perspectiveTransform(xy.reshape(-1, 1, 2), H), np.float32).reshape(xy.shape)
+    val = cv2.remap(s._tex32, mxy, None, cv2.INTER_LINEAR,  # type: ignore[call-overload]
+                    borderMode=cv2.BORDER_REFLECT101)
     hw, hh = s.half_w / s.texel_m, s.half_h / s.texel_m
     hit = cv2.inRange(mxy, (tw / 2.0 - hw, th / 2.0 - hh), (tw / 2.0 + hw, th / 2.0 + hh)) > 0
     den = n_c[0] * xy[..., 0] + n_c[1] * xy[..., 1] + np.float32(n_c[2])
@@ -216,18 +217,18 @@ class SimRenderer:
         R_wr = gimbal_rotation(gimbal.pan_deg, gimbal.tilt_deg)
         out: list[U8] = []
         ids_out: list[U8] = []
-        for k, view in enumerate(self.views):
+        for k in range(2):
             img8 = base_imgs[k].copy()
             ids = np.zeros(img8.shape, np.uint8)
             if moving:
                 self._cast_moving(k, R_wr, moving, t, img8, base_depths[k], ids)
             if gain != 1.0:
-                img8 = cv2.convertScaleAbs(img8, alpha=gain)
+                img8 = np.asarray(cv2.convertScaleAbs(img8, alpha=gain), np.uint8)
             if noisy:
                 pos, neg = self._noise[k]
                 o = int(self._rng.integers(0, 64))
                 h = img8.shape[0]
-                img8 = cv2.subtract(cv2.add(img8, pos[o:o + h]), neg[63 - o:63 - o + h])
+                img8 = np.asarray(cv2.subtract(cv2.add(img8, pos[o:o + h]), neg[63 - o:63 - o + h]), np.uint8)
             out.append(img8)
             ids_out.append(ids)
         frame = StereoFrame(index, out[0], out[1], t, t, gimbal)

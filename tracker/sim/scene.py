@@ -24,9 +24,9 @@ def smooth_texture(rng: np.random.Generator, shape: tuple[int, int], sigma_px: f
                    lo: int, hi: int) -> U8:
     """Band-limited random texture (Gaussian-smoothed noise), stretched to [lo, hi]; shape (h, w)."""
     noise = rng.standard_normal(shape).astype(np.float32)
-    tex = cv2.GaussianBlur(noise, (0, 0), sigma_px, borderType=cv2.BORDER_REFLECT101)
-    tex -= float(tex.min())
-    tex /= max(float(tex.max()), 1e-6)
+    tex = np.asarray(cv2.GaussianBlur(noise, (0, 0), sigma_px, borderType=cv2.BORDER_REFLECT101), np.float32)
+    tex = tex - np.float32(tex.min())
+    tex = tex / np.float32(max(float(tex.max()), 1e-6))
     return np.asarray(lo + tex * (hi - lo), dtype=np.float32).round().astype(np.uint8)
 
 

@@ -1,0 +1,80 @@
+"""The `tmeye` command as a user runs it: real processes, exit codes, one-line errors."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+
+def tmeye(*args: str, timeout: float = 120) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "tmeye", *args], capture_output=True, text=True,
+                          timeout=timeout)
+
+
+def test_eval_lists_the_scenarios() -> None:
+    out = tmeye("eval", "--list")
+    assert out.returncode == 0
+    names = {line.split()[0] for line in out.stdout.splitlines()}
+    assert {"walk", "illumination", "foliage", "approach", "two-targets", "pan", "calibration"} <= names
+
+
+def test_eval_json_on_a_short_run() -> None:
+    out = tmeye("eval", "--scenario", "walk", "--frames", "20", "--json")
+    assert out.returncode == 0, out.stderr
+    rep = json.loads(out.stdout)
+    assert rep["frames"] == 20 and rep["false_target_frames"] == 0 and rep["detection_rate"] > 0.9
+
+
+def test_track_prints_one_json_line_per_frame() -> None:
+    out = tmeye("track", "--frames", "5", "--json", "--fast")
+    assert out.returncode == 0, out.stderr
+    lines = [json.loads(x) for x in out.stdout.splitlines()]
+    assert [x["frame"] for x in lines] == [0, 1, 2, 3, 4]
+    assert all(x["detected"] for x in lines[1:])
+    for key in ("x", "y", "z", "r", "theta_deg", "phi_deg", "sigma_r", "sigma_theta_deg", "sigma_phi_deg"):
+        assert key in lines[-1]
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (("eval", "--scenario", "nope"), "unknown scenario 'nope'"),
+        (("eval", "--scenario", "walk", "--frames", "0"), "--frames must be at least 1"),
+        (("eval",), "give --scenario"),
+        (("bench", "--size", "big"), "--size must look like 640x480"),
+        (("bench", "--size", "10x10"), "out of range"),
+        (("track", "--source", "files", "a.mp4", "b.mp4"), "needs --rig"),
+        (("track", "--rig", "/nonexistent/rig.json"), "rig file not found"),
+        (("track", "--scenario", "nope"), "unknown scenario"),
+        (("eval", "--scenario", "walk", "--epsilon", "0"), "epsilon"),
+    ],
+)
+def test_bad_input_gives_one_line_and_exit_2(args: tuple[str, ...], message: str) -> None:
+    out = tmeye(*args)
+    assert out.returncode == 2
+    assert message in out.stderr
+    assert len(out.stderr.strip().splitlines()) == 1 and "Traceback" not in out.stderr
+
+
+def test_missing_video_files_are_named(tmp_path: Path) -> None:
+    from tracker.geometry import save_rig
+    from tracker.sim.rig import default_rig
+
+    rig = tmp_path / "rig.json"
+    save_rig(default_rig(), rig)
+    out = tmeye("track", "--source", "files", str(tmp_path / "l.mp4"), str(tmp_path / "r.mp4"), "--rig", str(rig))
+    assert out.returncode == 2 and "l.mp4" in out.stderr and "Traceback" not in out.stderr
+
+
+def test_missing_camera_device_is_named(tmp_path: Path) -> None:
+    from tracker.geometry import save_rig
+    from tracker.sim.rig import default_rig
+
+    rig = tmp_path / "rig.json"
+    save_rig(default_rig(), rig)
+    out = tmeye("track", "--source", "usb", "/dev/video98", "/dev/video99", "--rig", str(rig))
+    assert out.returncode == 2 and "/dev/video98" in out.stderr

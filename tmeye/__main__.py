@@ -1,0 +1,3 @@
+from tmeye.cli import main
+
+raise SystemExit(main())

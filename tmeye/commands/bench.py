@@ -1,0 +1,42 @@
+"""`tmeye bench`: per-stage and whole-step timing on one thread, against OpenCV's MOG2."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from typing import Any
+
+from tmeye.errors import UserError
+
+
+def parse_size(text: str) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise UserError(f"--size must look like 640x480, got {text!r}") from None
+    if not (64 <= w <= 4096 and 48 <= h <= 4096):
+        raise UserError(f"--size {w}x{h} is out of range (64x48 to 4096x4096)")
+    return w, h
+
+
+def register(subparsers: Any) -> None:
+    p = subparsers.add_parser("bench", help="time the pipeline per stage and against MOG2")
+    p.add_argument("--size", default="640x480", help="image size WxH (default 640x480)")
+    p.add_argument("--frames", type=int, default=300, help="frames to time (default 300)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from tracker.bench import run_bench
+
+    size = parse_size(args.size)
+    if args.frames < 10:
+        raise UserError(f"--frames must be at least 10, got {args.frames}")
+    report = run_bench(size, args.frames).to_json()
+    if args.json:
+        print(json.dumps(report))
+    else:
+        for k, v in report.items():
+            print(f"{k:22s} {v}")
+    return 0

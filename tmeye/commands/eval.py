@@ -1,0 +1,72 @@
+"""`tmeye eval`: accuracy against the simulated rig's ground truth, one JSON object per run."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from typing import Any
+
+from tmeye.errors import UserError
+from tmeye.progress import Progress
+
+SPECIAL = {
+    "calibration": "calibrate from rendered board views of the simulated rig and compare with its truth",
+}
+
+
+def register(subparsers: Any) -> None:
+    p = subparsers.add_parser("eval", help="measure accuracy on a simulated scenario")
+    p.add_argument("--scenario", help="scenario name (see --list)")
+    p.add_argument("--list", action="store_true", help="list the scenarios and exit")
+    p.add_argument("--frames", type=int, help="number of frames (default: the scenario's length)")
+    p.add_argument("--seed", type=int, default=0, help="random seed of the simulated scene (default 0)")
+    p.add_argument("--rig", help="rig file the tracker uses instead of the simulator's true rig")
+    p.add_argument("--epsilon", type=int, help="eq. (9) threshold ε in grey levels (default 12)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=run)
+
+
+def _scenarios() -> dict[str, str]:
+    from tracker.sim.scenarios import SCENARIOS
+
+    out = {name: s.description for name, s in SCENARIOS.items()}
+    out.update(SPECIAL)
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    names = _scenarios()
+    if args.list:
+        for name, desc in names.items():
+            print(f"{name:14s} {desc}")
+        return 0
+    if not args.scenario:
+        raise UserError("give --scenario NAME (or --list)")
+    if args.scenario not in names:
+        raise UserError(f"unknown scenario {args.scenario!r}; known: {', '.join(names)}")
+    if args.frames is not None and args.frames < 1:
+        raise UserError(f"--frames must be at least 1, got {args.frames}")
+    if args.scenario == "calibration":
+        from calibration.scenario import run_calibration_scenario
+
+        result: dict[str, object] = run_calibration_scenario(seed=args.seed).to_json()
+    else:
+        result = _tracking(args)
+    if args.json:
+        print(json.dumps(result))
+    else:
+        for k, v in result.items():
+            print(f"{k:28s} {v}")
+    return 0
+
+
+def _tracking(args: argparse.Namespace) -> dict[str, object]:
+    from tracker.detect import DetectorConfig
+    from tracker.evaluation import run_scenario
+    from tracker.geometry import load_rig
+
+    rig = load_rig(args.rig) if args.rig else None
+    det = DetectorConfig(epsilon=args.epsilon) if args.epsilon is not None else None
+    report = run_scenario(args.scenario, frames=args.frames, seed=args.seed, rig=rig, detector=det,
+                          progress=Progress(f"eval {args.scenario}"))
+    return report.to_json()

@@ -1,0 +1,71 @@
+"""Timing of the per-frame pipeline (`tmeye bench`): each stage and the whole step on one thread, and
+OpenCV's MOG2 on both images of the same frames for comparison."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass
+
+import cv2
+import numpy as np
+
+from tracker.frames import StereoFrame
+from tracker.pipeline import STAGES, Pipeline
+from tracker.sim.scenarios import SimRig, get_scenario
+
+
+@dataclass(frozen=True)
+class BenchReport:
+    """Milliseconds per stereo frame (medians unless named _p99)."""
+
+    size: tuple[int, int]
+    frames: int
+    stage_ms: dict[str, float]
+    step_ms_median: float
+    step_ms_p99: float
+    mog2_pair_ms_median: float
+    ratio_vs_mog2: float
+    render_ms_median: float
+
+    def to_json(self) -> dict[str, object]:
+        d = asdict(self)
+        d["size"] = f"{self.size[0]}x{self.size[1]}"
+        return {k: (round(v, 4) if isinstance(v, float) else v) for k, v in d.items()}
+
+
+def run_bench(size: tuple[int, int] = (640, 480), frames: int = 300, scenario: str = "walk",
+              seed: int = 0) -> BenchReport:
+    """Render `frames` frames of a scenario first, then time the pipeline and MOG2 on them."""
+    cv2.setNumThreads(1)
+    sim = SimRig(get_scenario(scenario), seed=seed, size=size)
+    pipe = Pipeline(sim.rig)
+    pipe.learn_background(sim.background())
+    rendered: list[StereoFrame] = []
+    render_ms = []
+    for _ in range(min(frames, sim.scenario.frames)):
+        t0 = time.perf_counter()
+        rendered.append(sim.step().frame)
+        render_ms.append((time.perf_counter() - t0) * 1e3)
+    steps, stages = [], {s: [] for s in STAGES}  # type: ignore[var-annotated]
+    for f in rendered:
+        t0 = time.perf_counter()
+        res = pipe.step(f)
+        steps.append((time.perf_counter() - t0) * 1e3)
+        for s in STAGES:
+            stages[s].append(res.stage_ms[s])
+    mogs = (cv2.createBackgroundSubtractorMOG2(), cv2.createBackgroundSubtractorMOG2())
+    bg = sim.background()
+    for _ in range(5):
+        mogs[0].apply(bg.left)
+        mogs[1].apply(bg.right)
+    mog_ms = []
+    for f in rendered:
+        t0 = time.perf_counter()
+        mogs[0].apply(f.left)
+        mogs[1].apply(f.right)
+        mog_ms.append((time.perf_counter() - t0) * 1e3)
+    step_med = float(np.median(steps))
+    mog_med = float(np.median(mog_ms))
+    return BenchReport(size, len(rendered), {s: float(np.median(v)) for s, v in stages.items()},
+                       step_med, float(np.percentile(steps, 99)), mog_med, mog_med / step_med,
+                       float(np.median(render_ms)))
