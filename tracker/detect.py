@@ -206,13 +206,13 @@ class StereoSubtractor:
         if cv2.countNonZero(fg) == 0:
             return ()
         grown = cv2.dilate(fg, np.ones((3, 3), np.uint8))
-        n, _labels, stats, _ = cv2.connectedComponentsWithStats(grown, connectivity=8)
+        contours, _ = cv2.findContours(grown, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
         h, w = self.bg.rect.rig.left.size[1], self.bg.rect.rig.left.size[0]
         min_low = max(2, self.cfg.min_area_px // (s * s) // 2)
         out = []
-        for i in range(1, n):
-            x, y, bw, bh, area = (int(v) for v in stats[i])
-            if area < min_low:
+        for c in contours:
+            x, y, bw, bh = cv2.boundingRect(c)
+            if bw * bh < min_low:
                 continue
             out.append((max(x * s - m, 0), max(y * s - m, 0), min((x + bw) * s + m, w),
                         min((y + bh) * s + m, h)))

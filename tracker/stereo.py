@@ -187,6 +187,23 @@ def _lr_consistent(left: U8, right: U8, x: float, xr: float, y: float, h: int, d
     return abs(xri + int(np.argmax(r)) - x) <= tol
 
 
+def _zncc_weighted(S: NDArray[np.floating], T: NDArray[np.floating], w: NDArray[np.floating]) -> F64:
+    """Weighted zero-mean normalised cross-correlation of template T (h, n) with weights w (h, n) at every
+    column position of strip S (h, m): shape (m - n + 1,), -1 where a window is flat. Direct sums (OpenCV's
+    masked TM_CCOEFF_NORMED goes through several full correlations and is slower for small searches)."""
+    ws = (w / max(float(w.sum()), 1e-12)).astype(np.float32)
+    Tc = T.astype(np.float32) - np.float32((T * ws).sum())
+    var_t = float((ws * Tc * Tc).sum())
+    S32 = S.astype(np.float32)
+    # three plain correlations (OpenCV, fast): Σ w W, Σ w W², Σ w W (T - T̄) at every position
+    mean_w = cv2.matchTemplate(S32, ws, cv2.TM_CCORR)[0].astype(np.float64)
+    mean_w2 = cv2.matchTemplate(S32 * S32, ws, cv2.TM_CCORR)[0].astype(np.float64)
+    num = cv2.matchTemplate(S32, ws * Tc, cv2.TM_CCORR)[0].astype(np.float64)
+    var_w = mean_w2 - mean_w * mean_w
+    den = np.sqrt(np.maximum(var_w, 0.0) * var_t)
+    return np.asarray(np.where(den > 1e-6, num / np.maximum(den, 1e-12), -1.0), dtype=np.float64)
+
+
 def _match(
     T: F32, S: F32, w: F32 | None, offset: int, span: int, min_score: float, uniqueness: float
 ) -> _Fit | None:
@@ -198,9 +215,10 @@ def _match(
     peak is on the border of the candidates, below min_score, within `uniqueness` of a second peak, or the
     refinement fails or moves by more than 1 px.
     """
-    r = cv2.matchTemplate(S[:, _PAD:-_PAD], T, cv2.TM_CCOEFF_NORMED, mask=w)[0].astype(np.float64)
-    if w is not None:
-        r = np.nan_to_num(r, nan=-1.0, posinf=-1.0, neginf=-1.0)
+    if w is None:
+        r = cv2.matchTemplate(S[:, _PAD:-_PAD], T, cv2.TM_CCOEFF_NORMED)[0].astype(np.float64)
+    else:
+        r = _zncc_weighted(S[:, _PAD:-_PAD], T, w)
     kk = int(np.argmax(r))
     if kk == 0 or kk == span or float(r[kk]) < min_score:
         return None

@@ -93,5 +93,12 @@ class MultiTracker:
             return
         self.primary_id = min(alive) if alive else None
 
+    def disparity_hint(self, box: tuple[int, int, int, int], t: float) -> float | None:
+        """The predicted disparity of the one track predicted inside `box` (raw left pixels), if any."""
+        x0, y0, x1, y1 = box
+        inside = [p for p in (tr.predict(t) for tr in self.tracks if tr.missed <= 2)
+                  if x0 <= p[0] < x1 and y0 <= p[1] < y1]
+        return float(inside[0][2]) if len(inside) == 1 else None
+
     def get(self, track_id: int) -> Track | None:
         return next((tr for tr in self.tracks if tr.track_id == track_id), None)

@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 from tracker.detect import Box, StereoSubtractor
 from tracker.frames import StereoFrame
 from tracker.rectify import Rectifier
-from tracker.stereo import match_region
+from tracker.stereo import RegionMatch, match_region
 
 U8 = NDArray[np.uint8]
 F64 = NDArray[np.float64]
@@ -71,6 +71,8 @@ def _largest(mask: BoolA, close: bool = False) -> BoolA:
     return out.astype(bool)
 
 
+_CORE = np.ones((3, 3), np.uint8)
+_MATCH_HALF = (24, 16)  # half width and height (px) of the largest window matched
 _RING = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (9, 9))
 _NEAR = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
 
@@ -83,7 +85,8 @@ def _temporal_outline(key: U8, bg: NDArray[np.float32], solid: BoolA, eps: int) 
     s8 = solid.astype(np.uint8)
     near = cv2.dilate(s8, _NEAR) > 0  # the stereo outline is good to a pixel or two
     ring = (cv2.dilate(s8, _RING) == 0) & (bg > 8.0)
-    g = float(np.median(key[ring] / bg[ring])) if int(ring.sum()) >= 20 else 1.0
+    kr, br = key[ring][::3], bg[ring][::3]  # every third ring pixel is plenty for one number
+    g = float(np.median(kr / br)) if kr.size >= 20 else 1.0
     diff = np.abs(key.astype(np.float32) - np.float32(g) * bg) > eps
     return _largest(diff & near, close=True), g
 
@@ -96,48 +99,79 @@ class Verifier:
         self.rect = rect
         self.cfg = sub.cfg
 
-    def verify(self, frame: StereoFrame, box: Box) -> Blob | None:
-        cfg, rect = self.cfg, self.rect
+    def verify(self, frame: StereoFrame, box: Box, d_hint: float | None = None) -> Blob | None:
+        """Verify one candidate box. d_hint: the disparity expected from a track (narrows the search)."""
+        cfg = self.cfg
         x0, y0, x1, y1 = box
         cm = self.sub.correspondence(0, frame.gimbal, box)
         m_left = _key_mask(frame.left[y0:y1, x0:x1], frame.right, cm.map_x, cm.map_y, cm.valid,
                            cfg.epsilon, self.sub.floor_at(box))
-        if int(m_left.sum()) < cfg.min_area_px:
+        if int(np.count_nonzero(m_left)) < cfg.min_area_px:
             return None
         # where the object overlaps its own ghost, Γ and Θ both show the object and may agree: holes
         m_left = _largest(m_left, close=True)
-        coarse = self._match(frame, box, m_left, None)
-        if coarse is None:
+        strips = self._strips(frame, box, m_left, d_hint)
+        if strips is None:
             return None
-        d0 = coarse[0]
-        obj = _largest(m_left & self._right_key_at(frame, box, d0))
+        if d_hint is None:  # a new object: find its disparity over the whole range first
+            coarse = strips.match(m_left, None, 0)
+            if coarse is None:
+                return None
+            d_hint = coarse.disparity
+        obj = _largest(m_left & self._right_key_at(frame, box, d_hint))
         bg = self.sub.left_background(frame.gimbal)
         gain = 1.0
         if bg is not None:
             obj, gain = _temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1], obj, cfg.epsilon)
-        area = int(obj.sum())
-        if area < cfg.min_area_px:
+        ys, xs = np.nonzero(obj)
+        if xs.size < cfg.min_area_px:
             return None
-        fine = self._match(frame, box, obj, d0)
+        fine = strips.match(obj, d_hint, 4)
         if fine is None:
             return None
-        d, sigma, score = fine
-        ys, xs = np.nonzero(obj)
-        rc = rect.rect_of_raw[0][y0:y1, x0:x1][ys, xs].astype(np.float64)
-        a = rect.area_of_raw[y0:y1, x0:x1][ys, xs].astype(np.float64)
+        d_bg = float(np.median(cm.disparity[ys, xs]))
+        if fine.disparity < d_bg * (1.0 + cfg.min_depth_gap) + cfg.min_disparity_gap_px:
+            return None  # not in front of the background: a misregistered background patch
+        rc = self.rect.rect_of_raw[0][y0:y1, x0:x1][ys, xs].astype(np.float64)
+        a = self.rect.area_of_raw[y0:y1, x0:x1][ys, xs].astype(np.float64)
         c_rect = (a[:, None] * rc).sum(axis=0) / a.sum()  # eq. (10) in rectified coordinates
         c_raw = np.array([xs.mean() + x0, ys.mean() + y0])  # eq. (10), c(i, j) = the object mask
-        d_bg = float(np.median(cm.disparity[ys, xs]))
-        if d < d_bg * (1.0 + cfg.min_depth_gap) + cfg.min_disparity_gap_px:
-            return None  # not in front of the background: a misregistered background patch
-        return Blob(box, obj, area, c_raw, c_rect, d, sigma, d_bg, score, gain)
+        return Blob(box, obj, int(xs.size), c_raw, c_rect, fine.disparity, fine.sigma, d_bg, fine.score, gain)
+
+    def _strips(self, frame: StereoFrame, box: Box, region: BoolA, d_hint: float | None) -> _Strips | None:
+        """Rectified left/right strips around a region's rows, wide enough for the disparity search."""
+        rect, cfg = self.rect, self.cfg
+        x0, y0, x1, y1 = box
+        ys, xs = np.nonzero(region)
+        if xs.size < 8:
+            return None
+        rc = rect.rect_of_raw[0][y0:y1, x0:x1][ys, xs]
+        w, h = rect.rig.left.size
+        rx0, ry0 = int(np.floor(rc[:, 0].min())), max(int(np.floor(rc[:, 1].min())), 0)
+        rx1, ry1 = int(np.ceil(rc[:, 0].max())) + 1, min(int(np.ceil(rc[:, 1].max())) + 1, h)
+        # a large object is matched on a central window only: its disparity is then already far more
+        # precise than its range needs (the range error grows as z², the object shrinks as 1/z)
+        cx, cy = (rx0 + rx1) // 2, (ry0 + ry1) // 2
+        rx0, rx1 = max(rx0, cx - _MATCH_HALF[0]), min(rx1, cx + _MATCH_HALF[0])
+        ry0, ry1 = max(ry0, cy - _MATCH_HALF[1]), min(ry1, cy + _MATCH_HALF[1])
+        d_hi = cfg.max_disparity if d_hint is None else int(np.ceil(d_hint)) + 8
+        d_hi = min(d_hi, rx0 - 3)
+        if d_hi < 3 or rx1 + 2 > w or ry1 <= ry0:
+            return None
+        sx0 = rx0 - d_hi - 2
+        box_r = (sx0, ry0, rx1 + 2, ry1)
+        return _Strips(rect, (x0, y0), (rx0, ry0, rx1, ry1), rect.rectify(frame.left, 0, box_r),
+                       rect.rectify(frame.right, 1, box_r), rx0 - sx0, d_hi)
 
     def _right_key_at(self, frame: StereoFrame, box: Box, d: float) -> BoolA:
         """The right-key mask of eq. (9), sampled at the left box's pixels shifted by disparity d."""
         rect = self.rect
         x0, y0, x1, y1 = box
-        rc = rect.rect_of_raw[0][y0:y1, x0:x1].astype(np.float64)
-        ur, vr = rect.raw_of_rect(1, rc[..., 0] - d, rc[..., 1])  # raw right position of each left pixel
+        rc = rect.rect_of_raw[0][y0:y1, x0:x1]
+        # raw right position of each left pixel: the right rectification map sampled at (x_rect - d, y_rect)
+        qx, qy = rc[..., 0] - np.float32(d), np.ascontiguousarray(rc[..., 1])
+        ur = cv2.remap(rect.maps[1][0], qx, qy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        vr = cv2.remap(rect.maps[1][1], qx, qy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
         w, h = rect.rig.right.size
         bx0, by0 = max(int(np.floor(ur.min())) - 1, 0), max(int(np.floor(vr.min())) - 1, 0)
         bx1, by1 = min(int(np.ceil(ur.max())) + 2, w), min(int(np.ceil(vr.max())) + 2, h)
@@ -152,36 +186,31 @@ class Verifier:
                             cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
         return np.asarray(sampled >= 0.5)
 
-    def _match(self, frame: StereoFrame, box: Box, obj: BoolA, d0: float | None
-               ) -> tuple[float, float, float] | None:
-        """Disparity of the object region along the epipolar lines, in rectified coordinates."""
-        rect = self.rect
-        x0, y0, _x1, _y1 = box
-        ys, xs = np.nonzero(obj)
-        if xs.size < 8:
-            return None
-        rc = rect.rect_of_raw[0][y0:_y1, x0:_x1][ys, xs]
-        w, h = rect.rig.left.size
-        rx0, ry0 = int(np.floor(rc[:, 0].min())), int(np.floor(rc[:, 1].min()))
-        rx1, ry1 = int(np.ceil(rc[:, 0].max())) + 1, int(np.ceil(rc[:, 1].max())) + 1
-        dmax = min(self.cfg.max_disparity, max(rx0 - 3, 0))
-        sx0 = rx0 - dmax - 2
-        if dmax < 3 or sx0 < 0 or rx1 + 2 > w or ry0 < 0 or ry1 > h:
-            return None
-        strip = (sx0, ry0, rx1 + 2, ry1)
-        left_r = rect.rectify(frame.left, 0, strip)
-        right_r = rect.rectify(frame.right, 1, strip)
-        # the object mask in rectified coordinates, shrunk by about a pixel so that no background
-        # next to the outline enters the match
-        mx, my = rect.maps[0]
+
+@dataclass(frozen=True)
+class _Strips:
+    """Rectified strips of both images over the rows of a region: the region's rectified window is
+    (rx0, ry0, rx1, ry1); it starts at column `off` of the strips; disparities up to d_hi fit."""
+
+    rect: Rectifier
+    origin: tuple[int, int]
+    window: Box
+    left: U8
+    right: U8
+    off: int
+    d_hi: int
+
+    def match(self, region: BoolA, d0: float | None, radius: int) -> RegionMatch | None:
+        """One disparity for the region (raw-left mask with its box's origin), mask-weighted, shrunk by
+        about a pixel so that no background next to the outline enters the match."""
+        x0, y0 = self.origin
+        rx0, ry0, rx1, ry1 = self.window
+        mx, my = self.rect.maps[0]
         mmx = mx[ry0:ry1, rx0:rx1] - np.float32(x0)
         mmy = my[ry0:ry1, rx0:rx1] - np.float32(y0)
-        wgt = cv2.remap(obj.astype(np.float32), mmx, mmy, cv2.INTER_LINEAR,
+        wgt = cv2.remap(region.astype(np.float32), mmx, mmy, cv2.INTER_LINEAR,
                         borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
-        wgt = cv2.erode((wgt > 0.99).astype(np.uint8), np.ones((3, 3), np.uint8))
-        if int(wgt.sum()) < 8:
-            wgt = (cv2.remap(obj.astype(np.float32), mmx, mmy, cv2.INTER_LINEAR) > 0.5).astype(np.uint8)
-        m = match_region(left_r, right_r, wgt, rx0 - sx0, 0, dmax + 2, d0)
-        if m is None:
-            return None
-        return m.disparity, m.sigma, m.score
+        core = cv2.erode((wgt > 0.99).astype(np.uint8), _CORE)
+        if int(np.count_nonzero(core)) < 8:
+            core = (wgt > 0.5).astype(np.uint8)
+        return match_region(self.left, self.right, core, self.off, 0, self.d_hi, d0, search_radius=radius)
