@@ -87,7 +87,8 @@ class StereoSubtractor:
         self.moving = False
         self._pending: tuple[U8, bool] | None = None
         self.static_floors: dict[tuple[float, float], tuple[U8, U8]] = {}
-        self.left_bg: dict[tuple[float, float], NDArray[np.float32]] = {}  # temporal model, gain 1
+        # temporal model per pose: background B and mean absolute deviation D, at gain 1
+        self.left_bg: dict[tuple[float, float], tuple[NDArray[np.float32], NDArray[np.float32]]] = {}
         self._stripe = 0
 
     # -- correspondence maps ----------------------------------------------------------------------
@@ -132,7 +133,7 @@ class StereoSubtractor:
             resid = np.asarray(cv2.subtract(resid, np.full_like(resid, 3)), np.uint8)  # less the noise level
             floors.append(np.asarray(cv2.dilate(resid, np.ones((3, 3), np.uint8)), np.uint8))
         self.static_floors[pose] = (floors[0], floors[1])
-        self.left_bg[pose] = frame.left.astype(np.float32)
+        self.left_bg[pose] = (frame.left.astype(np.float32), np.zeros(frame.left.shape, np.float32))
         s = self.cfg.stride
         if pose == self._pose(None):
             self.floor = np.ascontiguousarray(floors[0][::s, ::s])
@@ -150,25 +151,31 @@ class StereoSubtractor:
         g = gimbal or GimbalState()
         return (round(g.pan_deg, 4), round(g.tilt_deg, 4))
 
-    def left_background(self, gimbal: GimbalState | None) -> NDArray[np.float32] | None:
-        """The left camera's temporal background image at this pose (None while moving)."""
+    def left_background(self, gimbal: GimbalState | None
+                        ) -> tuple[NDArray[np.float32], NDArray[np.float32]] | None:
+        """The left camera's temporal model at this pose: background B and its mean absolute deviation D
+        (grey levels at gain 1; (H, W) float32 each). None while the cameras move."""
         return None if self.moving else self.left_bg.get(self._pose(gimbal))
 
     def update_left_background(self, frame: StereoFrame, objects: NDArray[np.bool_] | None,
                                gain: float, stripes: int = 16, alpha: float = 0.25) -> None:
         """Adapt the temporal background B ← B + α (Γ/g - B) on one horizontal stripe per frame (each
         row every `stripes` frames), away from objects; g is the global gain of this frame."""
-        bg = self.left_background(frame.gimbal)
-        if bg is None:
+        model = self.left_background(frame.gimbal)
+        if model is None:
             return
+        bg, dev = model
         h = bg.shape[0]
         k = self._stripe % stripes
         self._stripe += 1
         y0, y1 = k * h // stripes, (k + 1) * h // stripes
         cur = frame.left[y0:y1].astype(np.float32) * np.float32(1.0 / max(gain, 1e-3))
         keep = None if objects is None else objects[y0:y1]
-        upd = bg[y0:y1] + np.float32(alpha) * (cur - bg[y0:y1])
-        bg[y0:y1] = upd if keep is None else np.where(keep, bg[y0:y1], upd)
+        a = np.float32(alpha)
+        new_dev = dev[y0:y1] + a * (np.abs(cur - bg[y0:y1]) - dev[y0:y1])  # D ← D + α(|Γ/g - B| - D)
+        new_bg = bg[y0:y1] + a * (cur - bg[y0:y1])  # B ← B + α(Γ/g - B)
+        dev[y0:y1] = new_dev if keep is None else np.where(keep, dev[y0:y1], new_dev)
+        bg[y0:y1] = new_bg if keep is None else np.where(keep, bg[y0:y1], new_bg)
 
     def floor_at(self, box: Box) -> U8:
         """The temporal floor B upsampled (nearest) to the full-resolution pixels of `box`."""

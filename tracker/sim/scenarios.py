@@ -9,6 +9,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from tracker.closedloop_path import MANOEUVRE
 from tracker.frames import GimbalState, StereoFrame
 from tracker.geometry import StereoRig, gimbal_rotation
 from tracker.sim.render import FrameTruth, SimRenderer, TargetTruth
@@ -111,6 +112,9 @@ SCENARIOS: dict[str, Scenario] = {
                  frames=240, paths=((1, _panned),), gimbal=_pan_schedule),
         Scenario("occlusion", "target passing behind a post at 9 m (partial, then full occlusion)",
                  frames=330, paths=((1, _behind_post),)),
+        Scenario("manoeuvre", "closed loop: the servos follow a target turning at up to 30°/s, accelerating "
+                 "and stopping, over azimuth -32° to +38°", frames=285, paths=((1, MANOEUVRE),),
+                 closed_loop=True),
     )
 }
 
@@ -150,9 +154,11 @@ class SimRig:
         return self.index >= self.scenario.frames
 
     def background(self, gimbal: GimbalState | None = None) -> StereoFrame:
-        """An empty-scene pair (no moving objects) at the given pose: what a survey would capture."""
+        """An empty-scene pair (no moving objects; foliage in its state at t = -1 s) at the given pose: what
+        a survey would capture."""
         g = gimbal or self.scenario.gimbal(0.0)
-        frame, _ = self.renderer.render(-1, -1.0, g, [], 1.0)
+        scenery = [self._foliage] if self._foliage is not None else []  # the bush is background too
+        frame, _ = self.renderer.render(-1, -1.0, g, scenery, 1.0)
         return frame
 
     def step(self, gimbal: GimbalState | None = None) -> SimFrame:
