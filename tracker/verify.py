@@ -77,21 +77,18 @@ _RING = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (9, 9))
 _NEAR = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
 
 
-def _temporal_outline(key: U8, bg: NDArray[np.float32], dev: NDArray[np.float32], solid: BoolA, eps: int
-                      ) -> tuple[BoolA, float]:
+def _temporal_outline(key: U8, bg: NDArray[np.float32], dev: NDArray[np.float32], solid: BoolA,
+                      either: BoolA, eps: int) -> tuple[BoolA, float]:
     """The object's exact outline from the temporal model, inside the stereo-verified region.
 
-    The global gain g is the median ratio Γ/B on the box's background ring; then |Γ - g B| > ε inside the
-    stereo solid, and > ε + 3 D in the rest of its convex hull and a two-pixel rim (the stereo outline is
-    good to a pixel or two, but where the temporal floor was high the stereo mask has bays), where D is the
-    background's own mean deviation (large on swaying foliage next to the object).
+    solid: left-key ∩ warped right-key mask (no occlusion shadow, but holes where the object overlaps its
+    own shadow); either: their union (the whole object, and the shadows). The global gain g is the median
+    ratio Γ/B on the box's background ring; a pixel is the object if |Γ - g B| > ε inside `solid`, or
+    > ε + 3 D elsewhere in `either` or a two-pixel rim, where D is the background's own mean deviation: a
+    shadow falls on unchanged background (|Γ - g B| small) unless the background moves (foliage, large D).
     Returns the mask and g (1.0 when the ring is too small)."""
     s8 = solid.astype(np.uint8)
-    hull = np.zeros_like(s8)
-    pts = cv2.findNonZero(s8)
-    if pts is not None:
-        cv2.fillConvexPoly(hull, cv2.convexHull(pts), 1)
-    band = (cv2.dilate(hull, _NEAR) > 0) & ~solid  # holes the stereo mask left, and a two-pixel rim
+    band = ((cv2.dilate(either.astype(np.uint8), _NEAR) > 0) & ~solid)
     ring = (cv2.dilate(s8, _RING) == 0) & (bg > 8.0)
     kr, br = key[ring][::3], bg[ring][::3]  # every third ring pixel is plenty for one number
     g = float(np.median(kr / br)) if kr.size >= 20 else 1.0
@@ -120,19 +117,22 @@ class Verifier:
             return None
         # where the object overlaps its own ghost, Γ and Θ both show the object and may agree: holes
         m_left = _largest(m_left, close=True)
-        found = self._outline_stereo(frame, box, m_left, d_hint)
+        stereo = self._outline_stereo(frame, box, m_left, d_hint)
+        if stereo is None:
+            return None
+        obj, either, fine = stereo
+        gain = 1.0
         model = self.sub.left_background(frame.gimbal)
-        if found is not None and model is not None:
+        if model is not None:
             # cameras still: the temporal model draws the exact outline inside the stereo region
             bg, dev = model
             obj, gain = _temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1], dev[y0:y1, x0:x1],
-                                          found[0], cfg.epsilon)
-            strips = self._strips(frame, box, obj, found[1].disparity)
-            fine = None if strips is None else strips.match(obj, found[1].disparity, 2)
-            found = None if fine is None else (obj, fine, gain)
-        if found is None:
-            return None
-        obj, fine, gain = found
+                                          obj, either, cfg.epsilon)
+            strips = self._strips(frame, box, obj, fine.disparity)
+            refined = None if strips is None else strips.match(obj, fine.disparity, 2)
+            if refined is None:
+                return None
+            fine = refined
         ys, xs = np.nonzero(obj)
         d_bg = float(np.median(cm.disparity[ys[::3], xs[::3]]))
         if fine.disparity < d_bg * (1.0 + cfg.min_depth_gap) + cfg.min_disparity_gap_px:
@@ -144,9 +144,10 @@ class Verifier:
         return Blob(box, obj, int(xs.size), c_raw, c_rect, fine.disparity, fine.sigma, d_bg, fine.score, gain)
 
     def _outline_stereo(self, frame: StereoFrame, box: Box, m_left: BoolA,
-                        d_hint: float | None) -> tuple[BoolA, RegionMatch, float] | None:
+                        d_hint: float | None) -> tuple[BoolA, BoolA, RegionMatch] | None:
         """The left-key mask intersected with the right-key mask warped at the object's disparity: the
-        occlusion shadows of both keys drop out (verification by warping in both directions)."""
+        occlusion shadows of both keys drop out (verification by warping in both directions).
+        Returns that mask, the union of the two masks, and the disparity match."""
         strips = self._strips(frame, box, m_left, d_hint)
         if strips is None:
             return None
@@ -155,11 +156,12 @@ class Verifier:
             if coarse is None:
                 return None
             d_hint = coarse.disparity
-        obj = _largest(m_left & self._right_key_at(frame, box, d_hint))
+        m_right = self._right_key_at(frame, box, d_hint)
+        obj = _largest(m_left & m_right)
         if int(np.count_nonzero(obj)) < self.cfg.min_area_px:
             return None
         fine = strips.match(obj, d_hint, 4)
-        return None if fine is None else (obj, fine, 1.0)
+        return None if fine is None else (obj, m_left | m_right, fine)
 
     def _strips(self, frame: StereoFrame, box: Box, region: BoolA, d_hint: float | None) -> _Strips | None:
         """Rectified left/right strips around a region's rows, wide enough for the disparity search."""
