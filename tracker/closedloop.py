@@ -224,12 +224,14 @@ def widen_background(pipe: Pipeline, pan_range_deg: float, tilt_range_deg: float
     pipe.subtractor.reset_maps()
 
 
-def survey_grid(pan_deg: tuple[float, float], tilt_deg: tuple[float, float], step_deg: float = 16.0
-                ) -> list[GimbalState]:
+def survey_grid(pan_deg: tuple[float, float], tilt_deg: tuple[float, float], pan_step_deg: float = 20.0,
+                tilt_step_deg: float = 24.0) -> list[GimbalState]:
     """Poses (deg) at which to learn the background before a run whose mount stays in the given ranges:
-    evenly spaced, at most step_deg apart (the 56° field of view overlaps well)."""
-    def axis(lo: float, hi: float) -> list[float]:
-        n = max(int(math.ceil((hi - lo) / step_deg)), 0)
-        return [float(v) for v in np.linspace(lo, hi, n + 1)] if n else [0.5 * (lo + hi)]
+    from end to end, n + 1 of them where n = ceil(span / step) - 1 (so less than step + span / n apart:
+    the 56° x 44° field of view still overlaps by more than half); a range narrower than its step gets one
+    pose at its middle."""
+    def axis(lo: float, hi: float, step: float) -> list[float]:
+        n = int(math.ceil((hi - lo) / step)) - 1
+        return [float(v) for v in np.linspace(lo, hi, n + 1)] if n > 0 else [0.5 * (lo + hi)]
 
-    return [GimbalState(p, t) for t in axis(*tilt_deg) for p in axis(*pan_deg)]
+    return [GimbalState(p, t) for t in axis(*tilt_deg, tilt_step_deg) for p in axis(*pan_deg, pan_step_deg)]

@@ -180,9 +180,12 @@ def run_loop(name: str, seed: int, frames: int | None, predictive: bool,
     gap, lost_after = 0, round(1.0 * scenario.fps)
     for i in range(n):
         t = i / scenario.fps
+        t0 = time.perf_counter()
         sf = sim.step(gimbal.state_at(t))
+        acc.render_ms.append((time.perf_counter() - t0) * 1e3)
         st = loop.step(sf.frame)
         rec.latency_ms.append(st.latency_ms)
+        acc.step_ms.append(st.pipeline_ms)
         rec.commands += st.command is not None
         off = _aim_offset(sf.truth, sim)
         if off is not None:

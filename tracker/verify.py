@@ -120,7 +120,7 @@ class Verifier:
         stereo = self._outline_stereo(frame, box, m_left, d_hint)
         if stereo is None:
             return None
-        obj, either, fine = stereo
+        obj, either, d0 = stereo
         gain = 1.0
         model = self.sub.left_background(frame.gimbal)
         if model is not None:
@@ -128,11 +128,10 @@ class Verifier:
             bg, dev = model
             obj, gain = _temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1], dev[y0:y1, x0:x1],
                                           obj, either, cfg.epsilon)
-            strips = self._strips(frame, box, obj, fine.disparity)
-            refined = None if strips is None else strips.match(obj, fine.disparity, 2)
-            if refined is None:
-                return None
-            fine = refined
+        strips = self._strips(frame, box, obj, d0)
+        fine = None if strips is None else strips.match(obj, d0, 4)
+        if fine is None:
+            return None
         ys, xs = np.nonzero(obj)
         d_bg = float(np.median(cm.disparity[ys[::3], xs[::3]]))
         if fine.disparity < d_bg * (1.0 + cfg.min_depth_gap) + cfg.min_disparity_gap_px:
@@ -144,15 +143,14 @@ class Verifier:
         return Blob(box, obj, int(xs.size), c_raw, c_rect, fine.disparity, fine.sigma, d_bg, fine.score, gain)
 
     def _outline_stereo(self, frame: StereoFrame, box: Box, m_left: BoolA,
-                        d_hint: float | None) -> tuple[BoolA, BoolA, RegionMatch] | None:
+                        d_hint: float | None) -> tuple[BoolA, BoolA, float] | None:
         """The left-key mask intersected with the right-key mask warped at the object's disparity: the
         occlusion shadows of both keys drop out (verification by warping in both directions).
-        Returns that mask, the union of the two masks, and the disparity match."""
-        strips = self._strips(frame, box, m_left, d_hint)
-        if strips is None:
-            return None
-        if d_hint is None:  # a new object: find its disparity over the whole range first
-            coarse = strips.match(m_left, None, 0)
+        Returns that mask, the union of the two masks, and the disparity used (the track's prediction,
+        or for a new object a search over the whole range)."""
+        if d_hint is None:
+            strips = self._strips(frame, box, m_left, None)
+            coarse = None if strips is None else strips.match(m_left, None, 0)
             if coarse is None:
                 return None
             d_hint = coarse.disparity
@@ -160,8 +158,7 @@ class Verifier:
         obj = _largest(m_left & m_right)
         if int(np.count_nonzero(obj)) < self.cfg.min_area_px:
             return None
-        fine = strips.match(obj, d_hint, 4)
-        return None if fine is None else (obj, m_left | m_right, fine)
+        return obj, m_left | m_right, d_hint
 
     def _strips(self, frame: StereoFrame, box: Box, region: BoolA, d_hint: float | None) -> _Strips | None:
         """Rectified left/right strips around a region's rows, wide enough for the disparity search."""
