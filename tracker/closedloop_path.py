@@ -88,9 +88,10 @@ def _manoeuvre_height(t: float) -> float:
     return 0.3 + 0.2 * math.sin(2.0 * math.pi * t / 6.0)
 
 
-# Starts 10 m ahead at azimuth 0 heading right; the azimuth swings to +38° and -32° (more than the
-# 56° horizontal field of view), range 10-15 m, speeds up to 3.6 m/s, accelerations of ±6 m/s²,
-# coordinated turns of 25-30°/s (48 % of the time), two stop-start reversals; 9.5 s.
+# Starts 10 m ahead at azimuth 0 heading right; the azimuth swings from +38.5° to -19.5° (58°, more than
+# the 56° horizontal field of view; further left the target would pass behind the simulated scene's post),
+# range 9.6-11.2 m, speeds up to 3.6 m/s, accelerations of ±6 m/s², coordinated turns of 25-30°/s (38 % of
+# the time), line-of-sight rates up to 21°/s, two stop-start reversals; 9.8 s.
 MANOEUVRE = LegPath(
     (
         Leg(0.6, accel=6.0),  # accelerate to the right
@@ -100,13 +101,14 @@ MANOEUVRE = LegPath(
         Leg(0.4),
         Leg(0.6, accel=6.0, reverse=True),  # start back to the left
         Leg(0.4),
-        Leg(1.2, turn_deg_s=-30.0),
-        Leg(0.4),
-        Leg(1.8, turn_deg_s=30.0),
+        Leg(1.2, turn_deg_s=-30.0),  # turn away
+        Leg(0.8),
         Leg(0.6, accel=-6.0),  # stop
         Leg(0.3),
-        Leg(0.6, accel=6.0, reverse=True),
-        Leg(0.6, turn_deg_s=30.0),
+        Leg(0.6, accel=6.0, reverse=True),  # start back to the right
+        Leg(0.3),
+        Leg(1.5, turn_deg_s=30.0),  # turn towards the rig
+        Leg(0.5),
     ),
     start=(0.0, 10.0),
     heading_deg=90.0,

@@ -25,6 +25,17 @@ U8 = NDArray[np.uint8]
 Box = tuple[int, int, int, int]
 
 
+def paint_masks(masks: list[tuple[Box, NDArray[np.bool_]]], row0: int, shape: tuple[int, int]
+                ) -> NDArray[np.bool_]:
+    """Object masks (box, mask) painted into a bool image of `shape` whose first row is image row `row0`."""
+    out = np.zeros(shape, bool)
+    for (x0, y0, x1, y1), m in masks:
+        a, b = max(y0, row0), min(y1, row0 + shape[0])
+        if a < b:
+            out[a - row0:b - row0, x0:x1] |= m[a - y0:b - y0]
+    return out
+
+
 @dataclass(frozen=True)
 class DetectorConfig:
     """epsilon: eq. (9) threshold ε in grey levels; stride: candidate-search subsampling; min_area_px:
@@ -33,7 +44,7 @@ class DetectorConfig:
     by this fraction plus `min_disparity_gap_px`."""
 
     epsilon: int = 12
-    stride: int = 2
+    stride: int = 4
     min_area_px: int = 16
     absorb_s: float = 20.0
     fps: float = 30.0
@@ -58,6 +69,7 @@ class _PoseMaps:
     pose: tuple[float, float]
     low: CorrespondenceMap
     low_fixed: NDArray[np.int16]
+    valid_u8: U8
     full: dict[int, CorrespondenceMap] = field(default_factory=dict)
 
 
@@ -99,7 +111,8 @@ class StereoSubtractor:
             low = self.bg.correspondence(0, g, step=self.cfg.stride)
             mx = np.where(low.valid, low.map_x, -10.0).astype(np.float32)
             fixed = cv2.convertMaps(mx, low.map_y, cv2.CV_16SC2, nninterpolation=True)
-            self._maps = _PoseMaps(pose, low, np.asarray(fixed[0], np.int16))  # (h, w, 2) nearest pixels
+            self._maps = _PoseMaps(pose, low, np.asarray(fixed[0], np.int16),  # (h, w, 2) nearest pixels
+                                   low.valid.astype(np.uint8) * np.uint8(255))
         return self._maps
 
     def reset_maps(self) -> None:
@@ -157,7 +170,7 @@ class StereoSubtractor:
         (grey levels at gain 1; (H, W) float32 each). None while the cameras move."""
         return None if self.moving else self.left_bg.get(self._pose(gimbal))
 
-    def update_left_background(self, frame: StereoFrame, objects: NDArray[np.bool_] | None,
+    def update_left_background(self, frame: StereoFrame, objects: list[tuple[Box, NDArray[np.bool_]]],
                                gain: float, stripes: int = 16, alpha: float = 0.25) -> None:
         """Adapt the temporal background B ← B + α (Γ/g - B) on one horizontal stripe per frame (each
         row every `stripes` frames), away from objects; g is the global gain of this frame."""
@@ -170,7 +183,7 @@ class StereoSubtractor:
         self._stripe += 1
         y0, y1 = k * h // stripes, (k + 1) * h // stripes
         cur = frame.left[y0:y1].astype(np.float32) * np.float32(1.0 / max(gain, 1e-3))
-        keep = None if objects is None else objects[y0:y1]
+        keep = paint_masks(objects, y0, (y1 - y0, bg.shape[1])) if objects else None
         a = np.float32(alpha)
         new_dev = dev[y0:y1] + a * (np.abs(cur - bg[y0:y1]) - dev[y0:y1])  # D ← D + α(|Γ/g - B| - D)
         new_bg = bg[y0:y1] + a * (cur - bg[y0:y1])  # B ← B + α(Γ/g - B)
@@ -202,7 +215,7 @@ class StereoSubtractor:
         resid = np.asarray(cv2.absdiff(key, ref), np.uint8)  # |Γ(x, y) - Θ(x', y')|, eq. (9)
         excess = cv2.subtract(resid, self.floor)
         fg = np.asarray(cv2.threshold(excess, self.cfg.epsilon, 255, cv2.THRESH_BINARY)[1], np.uint8)
-        fg[~pm.low.valid] = 0
+        cv2.bitwise_and(fg, pm.valid_u8, dst=fg)
         boxes = self._boxes(fg)
         cv2.min(self.floor, resid, dst=self.floor)  # the floor falls at once
         self._pending = (resid, moving)

@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tracker.bgdepth import BackgroundDepth
-from tracker.detect import DetectorConfig, StereoSubtractor
+from tracker.detect import DetectorConfig, StereoSubtractor, paint_masks
 from tracker.frames import StereoFrame
 from tracker.geometry import StereoRig
 from tracker.localize import Localization, Localizer
@@ -50,11 +50,7 @@ class FrameResult:
 
     def foreground_mask(self, shape: tuple[int, int]) -> NDArray[np.bool_]:
         """The full-resolution left foreground mask of all verified objects, (H, W) bool."""
-        out = np.zeros(shape, bool)
-        for det in self.detections:
-            x0, y0, x1, y1 = det.blob.box
-            out[y0:y1, x0:x1] |= det.blob.mask
-        return out
+        return paint_masks([(d.blob.box, d.blob.mask) for d in self.detections], 0, shape)
 
 
 class Pipeline:
@@ -94,9 +90,7 @@ class Pipeline:
         self.subtractor.update_floor(self._foreground_low(blobs))
         gain = float(np.median([b.gain for b in blobs])) if blobs else self._last_gain
         self._last_gain = gain
-        fg_full = FrameResult(frame.index, frame.t, tuple(Detection(b, locs[0], -1) for b in blobs), None,
-                              None).foreground_mask(frame.left.shape) if blobs else None
-        self.subtractor.update_left_background(frame, fg_full, gain)
+        self.subtractor.update_left_background(frame, [(b.box, b.mask) for b in blobs], gain)
         t4 = time.perf_counter()
         for name, a, b in zip(STAGES, (t0, t1, t2, t3), (t1, t2, t3, t4), strict=True):
             ms[name] = (b - a) * 1e3

@@ -113,7 +113,7 @@ SCENARIOS: dict[str, Scenario] = {
         Scenario("occlusion", "target passing behind a post at 9 m (partial, then full occlusion)",
                  frames=330, paths=((1, _behind_post),)),
         Scenario("manoeuvre", "closed loop: the servos follow a target turning at up to 30°/s, accelerating "
-                 "and stopping, over azimuth -32° to +38°", frames=285, paths=((1, MANOEUVRE),),
+                 "and stopping, over azimuth -19° to +38°", frames=294, paths=((1, MANOEUVRE),),
                  closed_loop=True),
     )
 }
