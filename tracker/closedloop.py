@@ -184,6 +184,7 @@ class ServoSimSource:
 
     def __init__(self, sim: SimRig, driver: ServoDriver, angles: Callable[[], GimbalState] | None = None):
         self.sim = sim
+        self.scenario = sim.scenario
         self.driver = driver
         self.angles = angles
 

@@ -64,9 +64,24 @@ def _tracking(args: argparse.Namespace) -> dict[str, object]:
     from tracker.detect import DetectorConfig
     from tracker.evaluation import run_scenario
     from tracker.geometry import load_rig
+    from tracker.sim.scenarios import get_scenario
+
+    if get_scenario(args.scenario).closed_loop:
+        return _closed_loop(args)
 
     rig = load_rig(args.rig) if args.rig else None
     det = DetectorConfig(epsilon=args.epsilon) if args.epsilon is not None else None
     report = run_scenario(args.scenario, frames=args.frames, seed=args.seed, rig=rig, detector=det,
                           progress=Progress(f"eval {args.scenario}"))
+    return report.to_json()
+
+
+def _closed_loop(args: argparse.Namespace) -> dict[str, object]:
+    """A closed-loop scenario: the predictive loop and the reactive baseline drive the simulated gimbal."""
+    from tracker.closedloop_eval import evaluate_closed_loop
+
+    if args.rig or args.epsilon is not None:
+        raise UserError(f"--rig and --epsilon are not supported by the closed-loop scenario {args.scenario!r}")
+    report = evaluate_closed_loop(args.scenario, frames=args.frames, seed=args.seed,
+                                  progress=Progress(f"eval {args.scenario}"))
     return report.to_json()

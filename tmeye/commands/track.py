@@ -24,6 +24,8 @@ def register(subparsers: Any) -> None:
     p.add_argument("--json", action="store_true", help="one JSON line per frame")
     p.add_argument("--fast", action="store_true",
                    help="simulated source: run as fast as possible instead of at the scenario's frame rate")
+    p.add_argument("--servo", metavar="URL",
+                   help="close the loop: drive a pan/tilt mount (sim, maestro:/dev/ttyACM0, ascii:/dev/ttyUSB0)")
     p.set_defaults(func=run)
 
 
@@ -39,6 +41,11 @@ def _open(args: argparse.Namespace) -> tuple[Any, Any, list[Any]]:
         if args.inputs:
             raise UserError("--source sim takes no LEFT RIGHT inputs")
         sim = SimRig(get_scenario(args.scenario), seed=args.seed)
+        if args.servo:  # the mount follows the target: learn the background over its range
+            from tracker.closedloop import survey_grid
+            from tracker.closedloop_eval import mount_range
+
+            return sim, rig or sim.rig, [sim.background(g) for g in survey_grid(*mount_range(sim.scenario))]
         return sim, rig or sim.rig, [sim.background(g) for g in survey_poses(sim.scenario)]
     from tracker.sources import open_source
 
@@ -50,6 +57,33 @@ def _open(args: argparse.Namespace) -> tuple[Any, Any, list[Any]]:
         src.close()
         raise UserError(f"{args.source} source gave no frames")
     return src, rig, [first]  # the first pair is taken as the empty background
+
+
+def _servo_loop(args: argparse.Namespace, source: Any, pipe: Any) -> tuple[Any, Any]:
+    """(frame source, ServoLoop) for --servo URL: the driver is opened first, so a bad URL, a missing
+    port or a silent device is a one-line error before any tracking."""
+    from tracker.aim import AimConfig, AimController
+    from tracker.closedloop import LoopConfig, ServoLoop, ServoSimSource, background_range, widen_background
+    from tracker.closedloop_eval import closed_loop_imm, mount_range
+    from tracker.servo import ServoError, SimulatedGimbal, open_servo
+
+    try:
+        driver = open_servo(args.servo)
+    except ServoError as exc:
+        raise UserError(str(exc)) from None
+    ctrl = AimController(AimConfig(frame_width_px=pipe.rig.left.size[0], focal_px=pipe.rect.f))
+    lead = 0.09
+    if isinstance(driver, SimulatedGimbal):
+        if args.source != "sim":
+            driver.close()
+            raise UserError("--servo sim drives the simulated rig: use it with --source sim")
+        lead = driver.config.latency_s + driver.config.time_constant_s
+    if args.source == "sim":
+        widen_background(pipe, *background_range(*mount_range(source.scenario), pipe.rig.left.size,
+                                                 pipe.rect.f))
+        source = ServoSimSource(source, driver, lambda: ctrl.setpoint)
+    latency = 0.005 if isinstance(driver, SimulatedGimbal) else None  # simulated time: the budget
+    return source, ServoLoop(pipe, ctrl, closed_loop_imm(), driver, LoopConfig(lead_s=lead, latency_s=latency))
 
 
 def telemetry(res: Any, frame: Any, fps: float) -> dict[str, object]:
@@ -82,6 +116,9 @@ def run(args: argparse.Namespace) -> int:
         raise UserError(f"--frames must be at least 1, got {args.frames}")
     source, rig, background = _open(args)
     pipe = Pipeline(rig)
+    loop = None
+    if args.servo:
+        source, loop = _servo_loop(args, source, pipe)
     for bg in background:
         pipe.learn_background(bg)
     live = sys.stdout.isatty() and not args.json
@@ -95,11 +132,15 @@ def run(args: argparse.Namespace) -> int:
             frame = source.read()
             if frame is None:
                 break
-            res = pipe.step(frame)
+            step = loop.step(frame) if loop is not None else None
+            res = step.result if step is not None else pipe.step(frame)
             now = time.perf_counter()
             fps = 0.9 * fps + 0.1 / max(now - t_last, 1e-6) if n else 1.0 / max(now - t_last, 1e-6)
             t_last = now
             tm = telemetry(res, frame, fps)
+            if step is not None:
+                tm["servo"] = step.servo_json()
+                tm["latency_ms"] = round(step.latency_ms, 3)
             if args.json:
                 print(json.dumps(tm), flush=True)
             elif live:
@@ -110,6 +151,8 @@ def run(args: argparse.Namespace) -> int:
             n += 1
     finally:
         source.close()
+        if loop is not None and loop.driver is not None:
+            loop.driver.close()
         if live:
             print()
     return 0
