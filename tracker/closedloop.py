@@ -168,12 +168,10 @@ class ServoLoop:
             return cmd
         if isinstance(drv, SimulatedGimbal):
             drv.advance(max(frame.t + self.latency_s(), drv.now))
-        elif drv.fault is not None:
-            now = time.monotonic()
-            if now - self._last_attempt < self.config.retry_interval_s:
-                return None  # faulted: do not block on a silent device every frame
-            self._last_attempt = now
+        elif drv.fault is not None and time.monotonic() - self._last_attempt < self.config.retry_interval_s:
+            return None  # faulted: do not block on a silent device every frame
         drv.command(cmd.pan_deg, cmd.tilt_deg)
+        self._last_attempt = time.monotonic()
         return cmd
 
 
