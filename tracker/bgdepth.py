@@ -29,12 +29,14 @@ class CorrespondenceMap:
 
     map_x, map_y: float32 (h, w) raw reference coordinates; valid: bool (h, w), False where the
     background is unknown or falls outside the reference image; disparity: float32 (h, w), rectified
-    background disparity (px) for comparing against a target's."""
+    background disparity (px) for comparing against a target's; floor: uint8 (h, w), the residual of
+    eq. (9) on the empty scene in that direction (imperfect warps: half-occlusions, depth edges)."""
 
     map_x: F32
     map_y: F32
     valid: NDArray[np.bool_]
     disparity: F32
+    floor: U8
 
 
 def _remap_f32(img: F32, mx: F32, my: F32) -> F32:
@@ -55,6 +57,8 @@ class BackgroundDepth:
         self.canvas = np.zeros((h + 2 * self.pad[1], w + 2 * self.pad[0]), np.float32)
         self.cx, self.cy = w / 2.0 + self.pad[0], h / 2.0 + self.pad[1]
         self.rays = tuple(self._rays(cam) for cam in (rect.rig.left, rect.rig.right))
+        # per key camera: residual of eq. (9) on the surveyed empty scene, per world direction
+        self.floors = (np.zeros(self.canvas.shape, np.uint8), np.zeros(self.canvas.shape, np.uint8))
 
     @staticmethod
     def _rays(cam: Camera) -> F32:
@@ -89,7 +93,27 @@ class BackgroundDepth:
         order = np.argsort(-rho[ok])  # far first, so nearer surfaces win where both land
         self.canvas[pv[ok][order], pu[ok][order]] = (1.0 / rho[ok][order]).astype(np.float32)
         self._fill_holes()
+        for key in (0, 1):
+            self._learn_floor(frame, key)
         return int(ok.sum())
+
+    def _learn_floor(self, frame: StereoFrame, key: int) -> None:
+        """Store the empty scene's residual of eq. (9), less the noise level and dilated by a pixel, in
+        the floor canvas of camera `key` (the largest seen per direction)."""
+        cm = self.correspondence(key, frame.gimbal, with_floor=False)
+        img_k, img_o = (frame.left, frame.right) if key == 0 else (frame.right, frame.left)
+        ref = cv2.remap(img_o, cm.map_x, cm.map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        resid = np.asarray(cv2.absdiff(img_k, ref), np.uint8)
+        resid = np.asarray(cv2.subtract(resid, np.full_like(resid, 3)), np.uint8)
+        pu, pv = self._canvas_coords(key, frame.gimbal, 1, None)
+        iu, iv = np.round(pu).astype(int).ravel(), np.round(pv).astype(int).ravel()
+        vals = resid.ravel()
+        ok = (iu >= 0) & (iv >= 0) & (iu < self.canvas.shape[1]) & (iv < self.canvas.shape[0])
+        order = np.argsort(vals[ok], kind="stable")  # ascending: the largest lands last
+        layer = np.zeros_like(self.floors[key])
+        layer[iv[ok][order], iu[ok][order]] = vals[ok][order]
+        layer = np.asarray(cv2.dilate(layer, np.ones((3, 3), np.uint8)), np.uint8)  # close splat gaps
+        cv2.max(self.floors[key], layer, dst=self.floors[key])
 
     def _rect_points_to_rig(self, x: F64, y: F64, d: F64) -> F64:
         r = self.rect
@@ -113,22 +137,40 @@ class BackgroundDepth:
         self.canvas = np.where(inv >= 1e6, 0.0, inv).astype(np.float32)
 
     # -- lookup -----------------------------------------------------------------------------------
-    def correspondence(self, key: int, gimbal: GimbalState | None, step: int = 1,
-                       box: tuple[int, int, int, int] | None = None) -> CorrespondenceMap:
-        """Background correspondences from camera `key` (0 left, 1 right) into the other camera, for key
-        pixels on a grid with the given step, optionally only inside box = (x0, y0, x1, y1)."""
-        rig = self.rect.rig
-        cam_k, cam_r = (rig.left, rig.right) if key == 0 else (rig.right, rig.left)
+    def _canvas_coords(self, key: int, gimbal: GimbalState | None, step: int,
+                       box: tuple[int, int, int, int] | None) -> tuple[F32, F32]:
+        """Canvas coordinates of the world direction of each key pixel on the grid, (h, w) each."""
+        rays = self._grid_rays(key, step, box)
+        g = gimbal or GimbalState()
+        R_wr = gimbal_rotation(g.pan_deg, g.tilt_deg).astype(np.float32)
+        w = rays @ R_wr.T  # world directions (h, w, 3)
+        return (self.f * w[..., 0] / w[..., 2] + np.float32(self.cx),
+                self.f * w[..., 1] / w[..., 2] + np.float32(self.cy))
+
+    def _grid_rays(self, key: int, step: int, box: tuple[int, int, int, int] | None) -> F32:
         rays = self.rays[key]
         if box is not None:
             x0, y0, x1, y1 = box
             rays = rays[y0:y1, x0:x1]
-        rays = rays[::step, ::step]
+        return rays[::step, ::step]
+
+    def correspondence(self, key: int, gimbal: GimbalState | None, step: int = 1,
+                       box: tuple[int, int, int, int] | None = None, with_floor: bool = True
+                       ) -> CorrespondenceMap:
+        """Background correspondences from camera `key` (0 left, 1 right) into the other camera, for key
+        pixels on a grid with the given step, optionally only inside box = (x0, y0, x1, y1)."""
+        rig = self.rect.rig
+        cam_k, cam_r = (rig.left, rig.right) if key == 0 else (rig.right, rig.left)
+        rays = self._grid_rays(key, step, box)
         g = gimbal or GimbalState()
         R_wr = gimbal_rotation(g.pan_deg, g.tilt_deg).astype(np.float32)
         w = rays @ R_wr.T  # world directions (h, w, 3)
-        inv = _remap_f32(self.canvas, self.f * w[..., 0] / w[..., 2] + np.float32(self.cx),
-                         self.f * w[..., 1] / w[..., 2] + np.float32(self.cy))
+        pu = self.f * w[..., 0] / w[..., 2] + np.float32(self.cx)
+        pv = self.f * w[..., 1] / w[..., 2] + np.float32(self.cy)
+        inv = _remap_f32(self.canvas, pu, pv)
+        floor = (np.asarray(cv2.remap(self.floors[key], pu, pv, cv2.INTER_NEAREST,
+                                      borderMode=cv2.BORDER_CONSTANT, borderValue=0), np.uint8)
+                 if with_floor else np.zeros(pu.shape, np.uint8))
         valid = inv > 0
         t = 1.0 / np.where(valid, inv, np.float32(1.0))
         # ρ is measured from the pivot; the ray starts at the lens centre c: first-order correction
@@ -141,7 +183,7 @@ class BackgroundDepth:
         W, H = cam_r.size
         valid &= (z > 0) & (mx >= 0) & (my >= 0) & (mx <= W - 1) & (my <= H - 1)
         disp = self._disparity(X.astype(np.float32))  # X is in the rig frame whichever camera is key
-        return CorrespondenceMap(mx.astype(np.float32), my.astype(np.float32), valid, disp)
+        return CorrespondenceMap(mx.astype(np.float32), my.astype(np.float32), valid, disp, floor)
 
     def _disparity(self, X_rig: F32) -> F32:
         """Rectified disparity f b / z_rect of rig points (h, w, 3)."""

@@ -98,7 +98,6 @@ class StereoSubtractor:
         self._count = 0
         self.moving = False
         self._pending: tuple[U8, bool] | None = None
-        self.static_floors: dict[tuple[float, float], tuple[U8, U8]] = {}
         # temporal model per pose: background B and mean absolute deviation D, at gain 1
         self.left_bg: dict[tuple[float, float], tuple[NDArray[np.float32], NDArray[np.float32]]] = {}
         self._stripe = 0
@@ -131,33 +130,16 @@ class StereoSubtractor:
             pm.full[key] = full
         x0, y0, x1, y1 = box
         sl = (slice(y0, y1), slice(x0, x1))
-        return CorrespondenceMap(full.map_x[sl], full.map_y[sl], full.valid[sl], full.disparity[sl])
+        return CorrespondenceMap(full.map_x[sl], full.map_y[sl], full.valid[sl], full.disparity[sl],
+                                 full.floor[sl])
 
     def prime(self, frame: StereoFrame) -> None:
-        """Learn the residual of an empty-scene pair at its pose, for both keys: where the background warp
-        is imperfect (half-occlusions next to depth edges, aliasing), eq. (9) would fire on the
-        background itself. It becomes the floor of the right key's mask and the temporal floor's start."""
+        """Start the temporal model from an empty-scene pair at its pose: the background image B, and the
+        residual floor from the survey (BackgroundDepth's floor canvas) where the cameras are now."""
         pose = self._pose(frame.gimbal)
-        floors = []
-        for key, (img_k, img_o) in enumerate(((frame.left, frame.right), (frame.right, frame.left))):
-            cm = self.bg.correspondence(key, frame.gimbal)
-            ref = cv2.remap(img_o, cm.map_x, cm.map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-            resid = np.asarray(cv2.absdiff(img_k, ref), np.uint8)
-            resid = np.asarray(cv2.subtract(resid, np.full_like(resid, 3)), np.uint8)  # less the noise level
-            floors.append(np.asarray(cv2.dilate(resid, np.ones((3, 3), np.uint8)), np.uint8))
-        self.static_floors[pose] = (floors[0], floors[1])
         self.left_bg[pose] = (frame.left.astype(np.float32), np.zeros(frame.left.shape, np.float32))
-        s = self.cfg.stride
-        if pose == self._pose(None):
-            self.floor = np.ascontiguousarray(floors[0][::s, ::s])
-
-    def static_floor(self, key: int, gimbal: GimbalState | None, box: Box) -> U8 | None:
-        """The primed residual floor of camera `key` inside `box`, if the cameras are at a primed pose."""
-        floors = None if self.moving else self.static_floors.get(self._pose(gimbal))
-        if floors is None:
-            return None
-        x0, y0, x1, y1 = box
-        return np.asarray(floors[key][y0:y1, x0:x1])
+        if self._maps is None or self._maps.pose == pose:
+            self.floor = self.maps(frame.gimbal).low.floor.copy()
 
     @staticmethod
     def _pose(gimbal: GimbalState | None) -> tuple[float, float]:
@@ -213,7 +195,8 @@ class StereoSubtractor:
         key = frame.left[::s, ::s] if s > 1 else frame.left
         ref = cv2.remap(frame.right, pm.low_fixed, None, cv2.INTER_NEAREST)  # type: ignore[call-overload]
         resid = np.asarray(cv2.absdiff(key, ref), np.uint8)  # |Γ(x, y) - Θ(x', y')|, eq. (9)
-        excess = cv2.subtract(resid, self.floor)
+        floor = cv2.max(self.floor, pm.low.floor) if moving else self.floor  # the survey's, while moving
+        excess = cv2.subtract(resid, floor)
         fg = np.asarray(cv2.threshold(excess, self.cfg.epsilon, 255, cv2.THRESH_BINARY)[1], np.uint8)
         cv2.bitwise_and(fg, pm.valid_u8, dst=fg)
         boxes = self._boxes(fg)

@@ -112,7 +112,7 @@ class Verifier:
         x0, y0, x1, y1 = box
         cm = self.sub.correspondence(0, frame.gimbal, box)
         m_left = _key_mask(frame.left[y0:y1, x0:x1], frame.right, cm.map_x, cm.map_y, cm.valid,
-                           cfg.epsilon, self.sub.floor_at(box))
+                           cfg.epsilon, np.maximum(self.sub.floor_at(box), cm.floor))
         if int(np.count_nonzero(m_left)) < cfg.min_area_px:
             return None
         # where the object overlaps its own ghost, Γ and Θ both show the object and may agree: holes
@@ -201,7 +201,7 @@ class Verifier:
             return np.zeros((y1 - y0, x1 - x0), bool)
         rbox = (bx0, by0, bx1, by1)
         cm = self.sub.correspondence(1, frame.gimbal, rbox)
-        floor = self.sub.static_floor(1, frame.gimbal, rbox)
+        floor = cm.floor
         m_right = _largest(_key_mask(frame.right[by0:by1, bx0:bx1], frame.left, cm.map_x, cm.map_y,
                                      cm.valid, self.cfg.epsilon, floor), close=True).astype(np.float32)
         sampled = cv2.remap(m_right, (ur - bx0).astype(np.float32), (vr - by0).astype(np.float32),

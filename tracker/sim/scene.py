@@ -123,7 +123,8 @@ class MovingObject:
 
 
 def backdrop(rng: np.random.Generator) -> list[Surface]:
-    """The static scene: a far wall at 60 m, a facade at 22 m, a post at 9 m, and the ground."""
+    """The static scene: a far wall at 60 m, a hedge 1.2 m tall at 24 m, a facade at 22 m, a post at 9 m,
+    and the ground up to the hedge (a point-sampling renderer would alias a ground reaching the horizon)."""
     ex, ey, ez = np.eye(3)
     h = CAMERA_HEIGHT_M
     return [
@@ -133,8 +134,10 @@ def backdrop(rng: np.random.Generator) -> list[Surface]:
                 smooth_texture(rng, (160, 140), 2.5, 30, 120), 0.05),
         Surface("post", np.array([-4.05, h - 2.5, 9.0]), ex, ey, 0.15, 2.5,
                 smooth_texture(rng, (100, 12), 1.5, 20, 110), 0.025),
-        Surface("ground", np.array([0.0, h, 31.0]), ex, ez, 40.0, 29.5,
-                smooth_texture(rng, (600, 800), 4.0, 35, 125), 0.1),
+        Surface("hedge", np.array([0.0, h - 0.6, 24.0]), ex, ey, 40.0, 0.6,
+                smooth_texture(rng, (40, 2400), 2.0, 20, 100), 1.0 / 30),
+        Surface("ground", np.array([0.0, h, 12.75]), ex, ez, 40.0, 11.25,
+                smooth_texture(rng, (225, 800), 4.0, 35, 125), 0.1),
     ]
 
 
