@@ -14,8 +14,8 @@ from tracker.detect import DetectorConfig
 from tracker.frames import GimbalState
 from tracker.geometry import StereoRig
 from tracker.localize import spherical
-from tracker.pipeline import FrameResult, Pipeline
-from tracker.sim.render import FrameTruth
+from tracker.pipeline import Detection, FrameResult, Pipeline
+from tracker.sim.render import FrameTruth, TargetTruth
 from tracker.sim.scenarios import SimRig, get_scenario
 
 F64 = NDArray[np.float64]
@@ -60,7 +60,7 @@ class _Acc:
     detected: int = 0
     false_target: int = 0
     id_switches: int = 0
-    last_primary: int | None = None
+    last_id: int | None = None
     tp: int = 0
     fp: int = 0
     fn: int = 0
@@ -84,6 +84,13 @@ def _f1(tp: int, fp: int, fn: int) -> float:
     return 2 * tp / max(2 * tp + fp + fn, 1)
 
 
+def _on(det: Detection, target: TargetTruth) -> bool:
+    """Whether a detection's centroid lies on a true object (within half its size, at least 4 px)."""
+    if target.centroid_left is None:
+        return False
+    return bool(np.hypot(*(det.blob.centroid_raw - target.centroid_left)) < max(4.0, np.sqrt(target.area_left) / 2))
+
+
 def score_frame(acc: _Acc, res: FrameResult, truth: FrameTruth, pipe: Pipeline, min_area: int) -> None:
     """Add one frame's figures to the running sums."""
     fg_truth = truth.ids_left > 0
@@ -96,26 +103,24 @@ def score_frame(acc: _Acc, res: FrameResult, truth: FrameTruth, pipe: Pipeline, 
     tt = truth.target(1)
     visible = tt is not None and tt.centroid_left is not None and tt.area_left >= min_area
     prim = res.primary
-    if prim is not None:
-        near = [o for o in truth.targets if o.centroid_left is not None
-                and np.hypot(*(prim.blob.centroid_raw - o.centroid_left)) < max(4.0, np.sqrt(o.area_left) / 2)]
-        if not near:
-            acc.false_target += 1
-        if acc.last_primary is not None and res.primary_id != acc.last_primary:
-            acc.id_switches += 1
-        acc.last_primary = res.primary_id
+    if prim is not None and not any(_on(prim, o) for o in truth.targets):
+        acc.false_target += 1  # the reported primary target is on no real object
     if not visible or tt is None or tt.centroid_left is None:
         return
     acc.visible += 1
-    if prim is None or np.hypot(*(prim.blob.centroid_raw - tt.centroid_left)) > max(4.0, np.sqrt(tt.area_left) / 2):
+    det = next((d for d in res.detections if _on(d, tt)), None)  # target 1 seen, by whichever track
+    if det is None:
         return
+    if acc.last_id is not None and det.track_id != acc.last_id:
+        acc.id_switches += 1
+    acc.last_id = det.track_id
     acc.detected += 1
     rect = pipe.rect
     _, _, d_true = rect.rig_to_rect(tt.rig[None, :])
     r_t, th_t, ph_t = spherical(tt.world - pipe.localizer.origin)
-    loc = prim.loc
-    acc.cen.append(float(np.hypot(*(prim.blob.centroid_raw - tt.centroid_left))))
-    acc.disp.append(prim.blob.disparity - float(d_true[0]))
+    loc = det.loc
+    acc.cen.append(float(np.hypot(*(det.blob.centroid_raw - tt.centroid_left))))
+    acc.disp.append(det.blob.disparity - float(d_true[0]))
     acc.rng.append(loc.r - r_t)
     acc.rng_rel.append((loc.r - r_t) / r_t)
     z = float(tt.rig[2])

@@ -79,8 +79,8 @@ class Pipeline:
         t0 = time.perf_counter()
         cands = self.subtractor.step(frame)
         t1 = time.perf_counter()
-        blobs = [b for b in (self.verifier.verify(frame, box, self.tracker.disparity_hint(box, frame.t))
-                             for box in cands.boxes) if b is not None]
+        hints = self.tracker.predictions(frame.t)
+        blobs = [b for box in cands.boxes for b in self.verifier.verify_all(frame, box, hints)]
         t2 = time.perf_counter()
         locs = [self.localizer.locate(b.centroid_rect, b.disparity, b.disparity_sigma, b.area, frame.gimbal)
                 for b in blobs]

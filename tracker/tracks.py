@@ -37,7 +37,7 @@ class Track:
 class TrackerConfig:
     gate_px: float = 40.0
     confirm_hits: int = 2
-    max_missed: int = 15
+    max_missed: int = 45
 
 
 class MultiTracker:
@@ -93,12 +93,9 @@ class MultiTracker:
             return
         self.primary_id = min(alive) if alive else None
 
-    def disparity_hint(self, box: tuple[int, int, int, int], t: float) -> float | None:
-        """The predicted disparity of the one track predicted inside `box` (raw left pixels), if any."""
-        x0, y0, x1, y1 = box
-        inside = [p for p in (tr.predict(t) for tr in self.tracks if tr.missed <= 2)
-                  if x0 <= p[0] < x1 and y0 <= p[1] < y1]
-        return float(inside[0][2]) if len(inside) == 1 else None
+    def predictions(self, t: float) -> F64:
+        """Predicted (x, y, disparity) at time t of the tracks seen in the last few frames, (N, 3)."""
+        return np.array([tr.predict(t) for tr in self.tracks if tr.missed <= 2]).reshape(-1, 3)
 
     def get(self, track_id: int) -> Track | None:
         return next((tr for tr in self.tracks if tr.track_id == track_id), None)

@@ -15,6 +15,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from tracker.bgdepth import CorrespondenceMap
 from tracker.detect import Box, StereoSubtractor
 from tracker.frames import StereoFrame
 from tracker.rectify import Rectifier
@@ -56,18 +57,18 @@ def _key_mask(key: U8, other: U8, mx: NDArray[np.float32], my: NDArray[np.float3
 _CLOSE = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
 
 
-def _largest(mask: BoolA, close: bool = False) -> BoolA:
-    """The largest 8-connected component with its holes filled; with `close`, narrow channels into the
-    holes are sealed first (a morphological closing), so the holes are filled too."""
+def _largest(mask: BoolA, close: bool = False, every: bool = False) -> BoolA:
+    """The largest 8-connected component (or with `every`, all of them) with holes filled; with `close`,
+    narrow channels into the holes are sealed first (a morphological closing), so those are filled too."""
     m8 = mask.astype(np.uint8)
     if close:
         m8 = np.asarray(cv2.morphologyEx(m8, cv2.MORPH_CLOSE, _CLOSE), np.uint8) | m8
     contours, _ = cv2.findContours(m8, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     if not contours:
         return np.zeros_like(mask)
-    best = max(contours, key=cv2.contourArea)
+    keep = list(contours) if every else [max(contours, key=cv2.contourArea)]
     out = np.zeros(mask.shape, np.uint8)
-    cv2.drawContours(out, [best], -1, 1, thickness=cv2.FILLED)
+    cv2.drawContours(out, keep, -1, 1, thickness=cv2.FILLED)
     return out.astype(bool)
 
 
@@ -98,6 +99,34 @@ def _temporal_outline(key: U8, bg: NDArray[np.float32], dev: NDArray[np.float32]
     return _largest(inside | outside, close=True), g
 
 
+_TAKEN = np.ones((5, 5), np.uint8)
+
+
+def _taken(blob: Blob) -> BoolA:
+    """The pixels of a box that a found object explains: the object and its occlusion shadow (the object
+    shifted left by d - d_background, approximately, in raw pixels), grown by two pixels."""
+    m8 = blob.mask.astype(np.uint8)
+    shift = np.array([[1.0, 0.0, -(blob.disparity - blob.bg_disparity)], [0.0, 1.0, 0.0]], np.float32)
+    shadow = np.asarray(cv2.warpAffine(m8, shift, (m8.shape[1], m8.shape[0]), flags=cv2.INTER_NEAREST), np.uint8)
+    return np.asarray(cv2.dilate(m8 | shadow, _TAKEN) > 0)
+
+
+def _nearest_hint(hints: F64 | None, region: BoolA, box: Box) -> float | None:
+    """The disparity of the predicted track nearest to the region's centre, if one lies inside it."""
+    if hints is None or len(hints) == 0:
+        return None
+    ys, xs = np.nonzero(region)
+    if xs.size == 0:
+        return None
+    x0, y0 = box[0], box[1]
+    inside = [h for h in hints if 0 <= int(h[1]) - y0 < region.shape[0] and 0 <= int(h[0]) - x0 < region.shape[1]
+              and region[int(h[1]) - y0, int(h[0]) - x0]]
+    if not inside:
+        return None
+    c = np.array([xs.mean() + x0, ys.mean() + y0])
+    return float(min(inside, key=lambda h: float(np.hypot(*(h[:2] - c))))[2])
+
+
 class Verifier:
     """Turns candidate boxes into verified Blobs (or nothing)."""
 
@@ -106,17 +135,45 @@ class Verifier:
         self.rect = rect
         self.cfg = sub.cfg
 
-    def verify(self, frame: StereoFrame, box: Box, d_hint: float | None = None) -> Blob | None:
-        """Verify one candidate box. d_hint: the disparity expected from a track (narrows the search)."""
+    def verify_all(self, frame: StereoFrame, box: Box, hints: F64 | None = None, max_objects: int = 3
+                   ) -> list[Blob]:
+        """Verify a candidate box, which may hold several objects (one passing in front of another):
+        the largest first, then what is left once its pixels are taken out.
+        hints: (N, 3) predicted (x, y, disparity) of tracks in raw left pixels (narrows the search)."""
         cfg = self.cfg
         x0, y0, x1, y1 = box
         cm = self.sub.correspondence(0, frame.gimbal, box)
-        m_left = _key_mask(frame.left[y0:y1, x0:x1], frame.right, cm.map_x, cm.map_y, cm.valid,
-                           cfg.epsilon, np.maximum(self.sub.floor_at(box), cm.floor))
-        if int(np.count_nonzero(m_left)) < cfg.min_area_px:
-            return None
-        # where the object overlaps its own ghost, Γ and Θ both show the object and may agree: holes
-        m_left = _largest(m_left, close=True)
+        m_raw = _key_mask(frame.left[y0:y1, x0:x1], frame.right, cm.map_x, cm.map_y, cm.valid,
+                          cfg.epsilon, np.maximum(self.sub.floor_at(box), cm.floor))
+        found: list[Blob] = []
+        free = np.ones(m_raw.shape, bool)  # pixels no object found so far explains
+        for _ in range(max_objects):
+            if int(np.count_nonzero(m_raw)) < cfg.min_area_px:
+                break
+            # where the object overlaps its own ghost, Γ and Θ both show the object and may agree: holes
+            m_left = _largest(m_raw, close=True)
+            blob = self._verify_region(frame, box, cm, m_left, _nearest_hint(hints, m_left, box), free)
+            if blob is None:
+                m_raw = m_raw & ~m_left  # not an object: try what else the box holds
+                continue
+            found.append(blob)
+            taken = _taken(blob)
+            m_raw, free = m_raw & ~taken, free & ~taken
+        return found
+
+    def verify(self, frame: StereoFrame, box: Box, d_hint: float | None = None) -> Blob | None:
+        """Verify the largest object of one candidate box. d_hint: the disparity expected from a track."""
+        x0, y0, _, _ = box
+        cx, cy = (box[0] + box[2]) / 2.0, (box[1] + box[3]) / 2.0
+        hints = None if d_hint is None else np.array([[cx, cy, d_hint]])
+        blobs = self.verify_all(frame, box, hints, max_objects=1)
+        return blobs[0] if blobs else None
+
+    def _verify_region(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap, m_left: BoolA,
+                       d_hint: float | None, free: BoolA) -> Blob | None:
+        """Verify one connected region of the left-key mask inside a box."""
+        cfg = self.cfg
+        x0, y0, x1, y1 = box
         stereo = self._outline_stereo(frame, box, m_left, d_hint)
         if stereo is None:
             return None
@@ -127,7 +184,7 @@ class Verifier:
             # cameras still: the temporal model draws the exact outline inside the stereo region
             bg, dev = model
             obj, gain = _temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1], dev[y0:y1, x0:x1],
-                                          obj, either, cfg.epsilon)
+                                          obj, either & free, cfg.epsilon)
         strips = self._strips(frame, box, obj, d0)
         fine = None if strips is None else strips.match(obj, d0, 4)
         if fine is None:
@@ -158,7 +215,9 @@ class Verifier:
         obj = _largest(m_left & m_right)
         if int(np.count_nonzero(obj)) < self.cfg.min_area_px:
             return None
-        return obj, m_left | m_right, d_hint
+        # the rest of the object: where the right key sees it at this disparity, or next to the solid
+        near = cv2.dilate(obj.astype(np.uint8), _NEAR) > 0
+        return obj, m_right | (m_left & near), d_hint
 
     def _strips(self, frame: StereoFrame, box: Box, region: BoolA, d_hint: float | None) -> _Strips | None:
         """Rectified left/right strips around a region's rows, wide enough for the disparity search."""
@@ -203,7 +262,7 @@ class Verifier:
         cm = self.sub.correspondence(1, frame.gimbal, rbox)
         floor = cm.floor
         m_right = _largest(_key_mask(frame.right[by0:by1, bx0:bx1], frame.left, cm.map_x, cm.map_y,
-                                     cm.valid, self.cfg.epsilon, floor), close=True).astype(np.float32)
+                                     cm.valid, self.cfg.epsilon, floor), close=True, every=True).astype(np.float32)
         sampled = cv2.remap(m_right, (ur - bx0).astype(np.float32), (vr - by0).astype(np.float32),
                             cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
         return np.asarray(sampled >= 0.5)
