@@ -139,7 +139,10 @@ class StereoSubtractor:
         pose = self._pose(frame.gimbal)
         self.left_bg[pose] = (frame.left.astype(np.float32), np.zeros(frame.left.shape, np.float32))
         if self._maps is None or self._maps.pose == pose:
-            self.floor = self.maps(frame.gimbal).low.floor.copy()
+            pm = self.maps(frame.gimbal)
+            self.floor = pm.low.floor.copy()
+            for key in (0, 1):  # the full-resolution maps now, not on the first frame
+                pm.full[key] = self.bg.correspondence(key, frame.gimbal)
 
     @staticmethod
     def _pose(gimbal: GimbalState | None) -> tuple[float, float]:
