@@ -91,8 +91,8 @@ def _temporal_outline(key: U8, bg: NDArray[np.float32], dev: NDArray[np.float32]
     s8 = solid.astype(np.uint8)
     band = ((cv2.dilate(either.astype(np.uint8), _NEAR) > 0) & ~solid)
     ring = (cv2.dilate(s8, _RING) == 0) & (bg > 8.0)
-    kr, br = key[ring][::3], bg[ring][::3]  # every third ring pixel is plenty for one number
-    g = float(np.median(kr / br)) if kr.size >= 20 else 1.0
+    kr, br = key[ring], bg[ring]
+    g = float(kr.sum(dtype=np.float64) / br.sum(dtype=np.float64)) if kr.size >= 20 else 1.0  # Σ Γ / Σ B
     diff = np.abs(key.astype(np.float32) - np.float32(g) * bg)
     inside = solid & (diff > eps)
     outside = band & (diff > eps + 3.0 * np.float32(g) * dev)
@@ -147,16 +147,21 @@ class Verifier:
                           cfg.epsilon, np.maximum(self.sub.floor_at(box), cm.floor))
         found: list[Blob] = []
         free = np.ones(m_raw.shape, bool)  # pixels no object found so far explains
+        min_area = cfg.min_area_px
         for _ in range(max_objects):
-            if int(np.count_nonzero(m_raw)) < cfg.min_area_px:
+            if int(np.count_nonzero(m_raw)) < min_area:
                 break
             # where the object overlaps its own ghost, Γ and Θ both show the object and may agree: holes
             m_left = _largest(m_raw, close=True)
+            if int(np.count_nonzero(m_left)) < min_area:
+                break
             blob = self._verify_region(frame, box, cm, m_left, _nearest_hint(hints, m_left, box), free)
             if blob is None:
                 m_raw = m_raw & ~m_left  # not an object: try what else the box holds
                 continue
             found.append(blob)
+            # a second object in the same box must be substantial: not the rim left around the first
+            min_area = max(min_area, 4 * cfg.min_area_px, blob.area // 10)
             taken = _taken(blob)
             m_raw, free = m_raw & ~taken, free & ~taken
         return found
@@ -190,12 +195,12 @@ class Verifier:
         if fine is None:
             return None
         ys, xs = np.nonzero(obj)
-        d_bg = float(np.median(cm.disparity[ys[::3], xs[::3]]))
+        d_bg = float(np.median(cm.disparity[ys[::7], xs[::7]]))
         if fine.disparity < d_bg * (1.0 + cfg.min_depth_gap) + cfg.min_disparity_gap_px:
             return None  # not in front of the background: a misregistered background patch
         rc = self.rect.rect_of_raw[0][y0:y1, x0:x1][ys, xs].astype(np.float64)
         a = self.rect.area_of_raw[y0:y1, x0:x1][ys, xs].astype(np.float64)
-        c_rect = (a[:, None] * rc).sum(axis=0) / a.sum()  # eq. (10) in rectified coordinates
+        c_rect = (a @ rc) / a.sum()  # eq. (10) in rectified coordinates, pixels weighted by their area
         c_raw = np.array([xs.mean() + x0, ys.mean() + y0])  # eq. (10), c(i, j) = the object mask
         return Blob(box, obj, int(xs.size), c_raw, c_rect, fine.disparity, fine.sigma, d_bg, fine.score, gain)
 
