@@ -78,23 +78,24 @@ _RING = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (9, 9))
 _NEAR = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
 
 
-def _temporal_outline(key: U8, bg: NDArray[np.float32], dev: NDArray[np.float32], solid: BoolA,
-                      either: BoolA, eps: int) -> tuple[BoolA, float]:
-    """The object's exact outline from the temporal model, inside the stereo-verified region.
+def _temporal_outline(key: U8, bg: NDArray[np.float32], dev: NDArray[np.float32], core: BoolA,
+                      region: BoolA, eps: int) -> tuple[BoolA, float]:
+    """The object's exact outline from the temporal model, inside a stereo region.
 
-    solid: left-key ∩ warped right-key mask (no occlusion shadow, but holes where the object overlaps its
-    own shadow); either: their union (the whole object, and the shadows). The global gain g is the median
-    ratio Γ/B on the box's background ring; a pixel is the object if |Γ - g B| > ε inside `solid`, or
-    > ε + 3 D elsewhere in `either` or a two-pixel rim, where D is the background's own mean deviation: a
-    shadow falls on unchanged background (|Γ - g B| small) unless the background moves (foliage, large D).
+    core: pixels both keys agree are the object (left-key ∩ warped right-key mask: no occlusion shadow,
+    but holes where the object overlaps its own shadow); region: where the object may be (the keys'
+    union, or the left-key mask: the object and its shadow). The global gain g is Σ Γ / Σ B on the box's
+    ring outside the region; a pixel is the object if |Γ - g B| > ε in `core`, or > ε + 3 D elsewhere in
+    `region` or a two-pixel rim, where D is the background's own mean deviation: a shadow falls on
+    unchanged background (|Γ - g B| small) unless the background moves (foliage, large D).
     Returns the mask and g (1.0 when the ring is too small)."""
-    s8 = solid.astype(np.uint8)
-    band = ((cv2.dilate(either.astype(np.uint8), _NEAR) > 0) & ~solid)
-    ring = (cv2.dilate(s8, _RING) == 0) & (bg > 8.0)
+    grown = cv2.dilate((region | core).astype(np.uint8), _NEAR) > 0
+    band = grown & ~core
+    ring = (cv2.dilate(grown.astype(np.uint8), _RING) == 0) & (bg > 8.0)
     kr, br = key[ring], bg[ring]
     g = float(kr.sum(dtype=np.float64) / br.sum(dtype=np.float64)) if kr.size >= 20 else 1.0  # Σ Γ / Σ B
     diff = np.abs(key.astype(np.float32) - np.float32(g) * bg)
-    inside = solid & (diff > eps)
+    inside = core & (diff > eps)
     outside = band & (diff > eps + 3.0 * np.float32(g) * dev)
     return _largest(inside | outside, close=True), g
 
@@ -179,17 +180,25 @@ class Verifier:
         """Verify one connected region of the left-key mask inside a box."""
         cfg = self.cfg
         x0, y0, x1, y1 = box
-        stereo = self._outline_stereo(frame, box, m_left, d_hint)
-        if stereo is None:
-            return None
-        obj, either, d0 = stereo
         gain = 1.0
         model = self.sub.left_background(frame.gimbal)
-        if model is not None:
-            # cameras still: the temporal model draws the exact outline inside the stereo region
+        if model is not None and d_hint is not None:
+            # a tracked object, cameras still: the temporal model draws the outline inside the left-key
+            # region (object and shadow), at the strict threshold (moving background there stays out)
             bg, dev = model
             obj, gain = _temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1], dev[y0:y1, x0:x1],
-                                          obj, either & free, cfg.epsilon)
+                                          np.zeros_like(m_left), m_left & free, cfg.epsilon)
+            d0 = d_hint
+        else:
+            # a new object, or the cameras move: verification by warping in both directions
+            stereo = self._outline_stereo(frame, box, m_left, d_hint)
+            if stereo is None:
+                return None
+            obj, either, d0 = stereo
+            if model is not None:  # cameras still: the temporal model draws the exact outline
+                bg, dev = model
+                obj, gain = _temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1], dev[y0:y1, x0:x1],
+                                              obj, either & free, cfg.epsilon)
         strips = self._strips(frame, box, obj, d0)
         fine = None if strips is None else strips.match(obj, d0, 4)
         if fine is None:
