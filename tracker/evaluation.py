@@ -72,6 +72,7 @@ class _Acc:
     az: list[float] = field(default_factory=list)
     el: list[float] = field(default_factory=list)
     f1_frames: list[float] = field(default_factory=list)
+    mog2_f1: list[float] = field(default_factory=list)
     step_ms: list[float] = field(default_factory=list)
     render_ms: list[float] = field(default_factory=list)
 
@@ -143,6 +144,12 @@ def run_scenario(name: str, frames: int | None = None, seed: int = 0, rig: Stere
     n = min(frames or scenario.frames, scenario.frames)
     acc = _Acc()
     min_area = pipe.subtractor.cfg.min_area_px
+    # OpenCV's MOG2 on the same left images, for comparison where the light changes
+    mog = cv2.createBackgroundSubtractorMOG2(detectShadows=False) if _has_steps(scenario.gain, n) else None
+    if mog is not None:
+        empty = sim.background().left
+        for _ in range(30):
+            mog.apply(empty)
     for i in range(n):
         t0 = time.perf_counter()
         sf = sim.step()
@@ -152,9 +159,18 @@ def run_scenario(name: str, frames: int | None = None, seed: int = 0, rig: Stere
         acc.render_ms.append((t1 - t0) * 1e3)
         acc.step_ms.append((t2 - t1) * 1e3)
         score_frame(acc, res, sf.truth, pipe, min_area)
+        if mog is not None:
+            truth = sf.truth.ids_left > 0
+            fg = mog.apply(sf.frame.left) > 0
+            acc.mog2_f1.append(_f1(int(np.count_nonzero(fg & truth)), int(np.count_nonzero(fg & ~truth)),
+                                   int(np.count_nonzero(~fg & truth))))
         if progress is not None:
             progress(i + 1, n)
     return _report(name, seed, n, acc, scenario.gain)
+
+
+def _has_steps(gain: Callable[[float], float], n: int) -> bool:
+    return any(abs(gain(i / 30.0) - gain((i - 1) / 30.0)) > 0.05 for i in range(1, n))
 
 
 def survey_poses(scenario: object) -> list[GimbalState]:
@@ -174,8 +190,11 @@ def _report(name: str, seed: int, n: int, acc: _Acc, gain: Callable[[float], flo
     extra: dict[str, float] = {}
     steps = [i for i in range(1, n) if abs(gain(i / 30.0) - gain((i - 1) / 30.0)) > 0.05]
     if steps:
-        at = [acc.f1_frames[j] for i in steps for j in (i, i + 1) if j < n]
-        extra["pixel_f1_at_steps_min"] = float(min(at))
+        at = [j for i in steps for j in (i, i + 1) if j < n]
+        extra["pixel_f1_at_steps_min"] = float(min(acc.f1_frames[j] for j in at))
+        if acc.mog2_f1:
+            extra["mog2_pixel_f1_at_steps_min"] = float(min(acc.mog2_f1[j] for j in at))
+            extra["mog2_pixel_f1_at_steps_mean"] = float(np.mean([acc.mog2_f1[j] for j in at]))
     return EvalReport(
         scenario=name, seed=seed, frames=n, visible_frames=acc.visible,
         detection_rate=acc.detected / max(acc.visible, 1), false_target_frames=acc.false_target,
