@@ -205,21 +205,3 @@ def _report(name: str, seed: int, n: int, acc: _Acc, gain: Callable[[float], flo
         azimuth_rmse_deg=_rms(acc.az), elevation_rmse_deg=_rms(acc.el),
         step_ms_median=float(np.median(acc.step_ms)), render_ms_median=float(np.median(acc.render_ms)),
         extra=extra)
-
-
-def mog2_f1(name: str, frames: int | None = None, seed: int = 0) -> float:
-    """Pixel F1 of OpenCV's MOG2 on the left images of a scenario, for comparison."""
-    scenario = get_scenario(name)
-    sim = SimRig(scenario, seed=seed)
-    mog = cv2.createBackgroundSubtractorMOG2(detectShadows=False)
-    for _ in range(30):
-        mog.apply(sim.background().left)
-    tp = fp = fn = 0
-    for _ in range(min(frames or scenario.frames, scenario.frames)):
-        sf = sim.step()
-        fg = mog.apply(sf.frame.left) > 0
-        truth = sf.truth.ids_left > 0
-        tp += int(np.count_nonzero(fg & truth))
-        fp += int(np.count_nonzero(fg & ~truth))
-        fn += int(np.count_nonzero(~fg & truth))
-    return _f1(tp, fp, fn)
