@@ -19,6 +19,7 @@ from enum import StrEnum
 from typing import Protocol
 
 import numpy as np
+import scipy.linalg
 from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter, unscented_transform
 from numpy.typing import NDArray
 
@@ -183,6 +184,77 @@ def fx_ct(s: F64, dt: float) -> F64:
     return out
 
 
+def fx_cv_batch(S: F64, dt: float) -> F64:
+    """fx_cv for many states at once: S (N, n) -> (N, n)."""
+    out = S.copy()
+    out[:, 0:3] += S[:, 3:6] * dt
+    return out
+
+
+def fx_ct_batch(S: F64, dt: float) -> F64:
+    """fx_ct for many states at once: S (N, 7) -> (N, 7)."""
+    out = S.copy()
+    vx, vz, w = S[:, 3], S[:, 5], S[:, 6]
+    wt = w * dt
+    small = np.abs(wt) < 1e-6
+    w_safe = np.where(small, 1.0, w)
+    a = np.where(small, dt, np.sin(wt) / w_safe)  # sin(ωT)/ω -> T
+    b = np.where(small, 0.5 * w * dt * dt, (1.0 - np.cos(wt)) / w_safe)  # (1 - cos ωT)/ω -> ωT²/2
+    c, sn = np.cos(wt), np.sin(wt)
+    out[:, 0] = S[:, 0] + a * vx + b * vz
+    out[:, 1] = S[:, 1] + S[:, 4] * dt
+    out[:, 2] = S[:, 2] - b * vx + a * vz
+    out[:, 3] = c * vx + sn * vz
+    out[:, 5] = -sn * vx + c * vz
+    return out
+
+
+def hx_spherical_batch(S: F64) -> F64:
+    """h for many states: S (N, n) -> (N, 3) of [r, θ, φ]."""
+    x, y, z = S[:, 0], S[:, 1], S[:, 2]
+    rho = np.hypot(x, z)
+    return np.stack([np.sqrt(rho * rho + y * y), np.arctan2(x, z), np.arctan2(-y, rho)], axis=1)
+
+
+class _FastUKF(UnscentedKalmanFilter):  # type: ignore[misc]
+    """filterpy's UKF with the per-sigma-point Python loops replaced by array operations (the same
+    equations: χ' = f(χ), Z = h(χ'), P_xz = Σ W_c (χ' - x)(Z - z)ᵀ)."""
+
+    x: F64
+    P: F64
+
+    def __init__(self, dim_x: int, fx_batch: Callable[[F64, float], F64], *args: object, **kw: object):
+        super().__init__(dim_x, *args, **kw)
+        self.fx_batch = fx_batch
+
+    def compute_process_sigmas(self, dt: float, fx: object = None, **fx_args: object) -> None:
+        self.sigmas_f = self.fx_batch(self.points_fn.sigma_points(self.x, self.P), dt)
+
+    def cross_variance(self, x: F64, z: F64, sigmas_f: F64, sigmas_h: F64) -> F64:
+        dx = sigmas_f - x
+        dz = sigmas_h - z
+        dz[:, 1] = (dz[:, 1] + math.pi) % (2.0 * math.pi) - math.pi  # θ wrapped
+        return np.asarray((self.Wc[:, None] * dx).T @ dz)
+
+    def update(self, z: F64, R: F64 | None = None, UT: object = None, hx: object = None, **hx_args: object
+               ) -> None:
+        R = self.R if R is None else R
+        self.sigmas_h = hx_spherical_batch(self.sigmas_f)
+        zp = self.z_mean(self.sigmas_h, self.Wm)  # ẑ = Σ W_m Z (θ by its circular mean)
+        dz = self.sigmas_h - zp
+        dz[:, 1] = (dz[:, 1] + math.pi) % (2.0 * math.pi) - math.pi
+        self.S = (self.Wc[:, None] * dz).T @ dz + R  # S = Σ W_c (Z - ẑ)(Z - ẑ)ᵀ + R
+        self.SI = self.inv(self.S)
+        Pxz = self.cross_variance(self.x, zp, self.sigmas_f, self.sigmas_h)
+        self.K = Pxz @ self.SI  # Kalman gain
+        self.y = self.residual_z(z, zp)  # residual
+        self.x = self.x + self.K @ self.y
+        self.P = self.P - self.K @ self.S @ self.K.T
+        self.z = np.array(z, copy=True)
+        self.x_post, self.P_post = self.x.copy(), self.P.copy()
+        self._log_likelihood = self._likelihood = self._mahalanobis = None
+
+
 def q_white_accel(dt: float, psd: float) -> F64:
     """Process noise (6, 6) of continuous white acceleration with spectral density psd (m²/s³) per axis:
     per axis [[dt³/3, dt²/2], [dt²/2, dt]] psd, ordered [x, y, z, vx, vy, vz]."""
@@ -224,6 +296,11 @@ class MotionModel:
     turn_psd: float = 0.0
     mean_sojourn_s: float = 4.0
 
+    @property
+    def fx_batch(self) -> Callable[[F64, float], F64]:
+        """fx over many states at once, (N, n) -> (N, n)."""
+        return _BATCH.get(self.fx, lambda S, dt: np.array([self.fx(s, dt) for s in S]))
+
     def Q(self, dt: float, dim: int) -> F64:
         """Process noise (dim, dim) for a step of dt seconds."""
         Q = np.zeros((dim, dim))
@@ -243,9 +320,19 @@ class PredictorConfig:
     init_turn_sigma: float = 0.5
 
 
+class _FastMerwe(MerweScaledSigmaPoints):  # type: ignore[misc]
+    """Van der Merwe's sigma points, built with array operations: χ_0 = x, χ_±k = x ± U_k,
+    U = chol((λ + n) P) (upper triangular, rows k)."""
+
+    def sigma_points(self, x: F64, P: F64) -> F64:
+        lam = self.alpha**2 * (self.n + self.kappa) - self.n  # λ = α²(n + κ) - n
+        U = scipy.linalg.cholesky((lam + self.n) * P)  # upper: UᵀU = (λ + n) P
+        return np.vstack([x, x + U, x - U])
+
+
 def _sigma_points(n: int) -> MerweScaledSigmaPoints:
     # α = 1, κ = 0 -> λ = 0: no negative weights, points at ±√n σ.
-    return MerweScaledSigmaPoints(n, alpha=1.0, beta=2.0, kappa=0.0)
+    return _FastMerwe(n, alpha=1.0, beta=2.0, kappa=0.0)
 
 
 class UKFBankPredictor:
@@ -258,9 +345,7 @@ class UKFBankPredictor:
         self.config = config or PredictorConfig()
         pts = _sigma_points(dim)
         self._ukfs = [
-            UnscentedKalmanFilter(
-                dim, 3, 0.0, hx_spherical, m.fx, pts, z_mean_fn=_z_mean, residual_z=_residual_z
-            )
+            _FastUKF(dim, m.fx_batch, 3, 0.0, hx_spherical, m.fx, pts, z_mean_fn=_z_mean, residual_z=_residual_z)
             for m in self.models
         ]
         self._mu = np.full(len(self.models), 1.0 / len(self.models))
@@ -311,7 +396,7 @@ class UKFBankPredictor:
         xs, Ps = [], []
         for m, ukf, x0, P0 in zip(self.models, self._ukfs, xs0, Ps0, strict=True):
             sig = ukf.points_fn.sigma_points(x0, P0)
-            sig_f = np.array([m.fx(s, dt) for s in sig])
+            sig_f = m.fx_batch(sig, dt)
             x, P = unscented_transform(sig_f, ukf.Wm, ukf.Wc, m.Q(dt, self.dim))
             xs.append(x)
             Ps.append(P)
@@ -415,6 +500,8 @@ def _combine(xs: Sequence[F64], Ps: Sequence[F64], mu: F64) -> tuple[F64, F64]:
     P = sum(m * (Pj + np.outer(xj - x, xj - x)) for m, xj, Pj in zip(mu, xs, Ps, strict=True))
     return x, np.asarray(P)
 
+
+_BATCH: dict[FX, Callable[[F64, float], F64]] = {fx_cv: fx_cv_batch, fx_ct: fx_ct_batch}
 
 # Tuned on the seeded scenarios of tests/test_predict.py (targets 6-15 m away at 3-8 m/s, 30 Hz).
 CV_ACCEL_PSD = 4.0  # m²/s³: the CV baseline's best compromise between straight and turning flight
