@@ -1,7 +1,8 @@
 """Exact rendering of chessboard views for the simulated rig (calibration ground truth, issue 3).
 
 Every pixel is rendered from the true camera: each of its ss x ss sub-samples is turned into a ray
-through the lens model (Camera.rays_rig, which undoes the Brown-Conrady distortion), the ray is
+through the lens model (Camera.undistort_pixels, which undoes the Brown-Conrady distortion, evaluated
+exactly on the pixel grid and interpolated between pixels; only the board's bounding box), the ray is
 intersected with the board plane, and the sub-sample takes the colour of the square it lands on; the
 pixel is their mean (anti-aliasing), so the rendered corners are where the true projection puts them to
 a small fraction of a pixel. The board is a plate of (cols+1) x (rows+1) squares with a white margin,
@@ -22,7 +23,7 @@ F32 = NDArray[np.float32]
 U8 = NDArray[np.uint8]
 
 BLACK, WHITE, BACKGROUND = 25.0, 230.0, 120.0
-_RAY_CACHE: dict[tuple[bytes, ...], F32] = {}
+_GRID_CACHE: dict[tuple[bytes, ...], F64] = {}
 
 
 @dataclass(frozen=True)
@@ -41,20 +42,37 @@ class BoardPose:
         return out
 
 
-def _subsample_rays(cam: Camera, ss: int) -> F32:
-    """Unit rays in the rig frame for ss x ss sub-samples of every pixel, shape (H, ss, W, ss, 3);
-    pixel centres are at integer coordinates (OpenCV convention). Cached per camera."""
-    key = (cam.K.tobytes(), cam.dist.tobytes(), cam.R_rc.tobytes(), cam.c.tobytes(),
-           repr((cam.size, ss)).encode())
-    if key not in _RAY_CACHE:
+def _pixel_grid(cam: Camera) -> F64:
+    """Undistorted normalised coordinates (x, y) of every integer pixel position from -1 to w (and -1 to
+    h), shape (h + 2, w + 2, 2), float64; cached per camera (2.5 MB at 640 x 480, ~0.1 s)."""
+    key = (cam.K.tobytes(), cam.dist.tobytes(), repr(cam.size).encode())
+    if key not in _GRID_CACHE:
         w, h = cam.size
-        offs = (np.arange(ss) + 0.5) / ss - 0.5
-        u = (np.arange(w)[:, None] + offs[None, :]).ravel()
-        v = (np.arange(h)[:, None] + offs[None, :]).ravel()
-        uu, vv = np.meshgrid(u, v)
-        rays = cam.rays_rig(uu, vv).astype(np.float32)
-        _RAY_CACHE[key] = rays.reshape(h, ss, w, ss, 3)
-    return _RAY_CACHE[key]
+        uu, vv = np.meshgrid(np.arange(-1.0, w + 1.0), np.arange(-1.0, h + 1.0))
+        xn, yn = cam.undistort_pixels(uu, vv, iterations=20)
+        _GRID_CACHE[key] = np.stack([xn, yn], axis=-1)
+    return _GRID_CACHE[key]
+
+
+def _subsample_xy(cam: Camera, ss: int, box: tuple[int, int, int, int]) -> tuple[F32, F32]:
+    """Undistorted normalised camera coordinates (x, y) of the ss x ss sub-samples of the pixels in
+    box = (x0, y0, x1, y1), each shaped (y1 - y0, ss, x1 - x0, ss); pixel centres are at integer
+    coordinates (OpenCV convention). A sub-sample's coordinates are bilinearly interpolated from the
+    exact per-pixel grid (the weights are the same for every pixel, so this is four shifted slices per
+    sub-sample offset); the lens map is smooth, so the error is below 1e-4 px."""
+    x0, y0, x1, y1 = box
+    grid = _pixel_grid(cam)
+    offs = (np.arange(ss) + 0.5) / ss - 0.5
+    out = np.empty((2, y1 - y0, ss, x1 - x0, ss), dtype=np.float32)
+    for j, oy in enumerate(offs):
+        r0, av = (y0, 1.0 + oy) if oy < 0 else (y0 + 1, oy)  # grid row index of pixel row y is y + 1
+        for i, ox in enumerate(offs):
+            c0, au = (x0, 1.0 + ox) if ox < 0 else (x0 + 1, ox)
+            g = grid[r0 : r0 + (y1 - y0) + 1, c0 : c0 + (x1 - x0) + 1]
+            top = (1.0 - au) * g[:-1, :-1] + au * g[:-1, 1:]
+            bot = (1.0 - au) * g[1:, :-1] + au * g[1:, 1:]
+            out[:, :, j, :, i] = np.moveaxis((1.0 - av) * top + av * bot, -1, 0)
+    return out[0], out[1]
 
 
 def _bbox(cam: Camera, pose: BoardPose, lo: F64, hi: F64) -> tuple[int, int, int, int] | None:
@@ -95,8 +113,8 @@ def render_board(
     box = _bbox(cam, pose, lo, hi)
     if box is not None:
         x0, y0, x1, y1 = box
-        rays = _subsample_rays(cam, supersample)[y0:y1, :, x0:x1]
-        img[y0:y1, x0:x1] = _shade(rays, cam, pose, square, lo, hi).mean(axis=(1, 3))
+        x, y = _subsample_xy(cam, supersample, box)
+        img[y0:y1, x0:x1] = _shade(x, y, cam, pose, square, lo, hi).mean(axis=(1, 3))
     if noise_sigma > 0:
         gen = rng if rng is not None else np.random.default_rng()
         img = img + gen.normal(0.0, noise_sigma, img.shape)
@@ -104,21 +122,22 @@ def render_board(
     return out
 
 
-def _shade(rays: F32, cam: Camera, pose: BoardPose, square: float, lo: F64, hi: F64) -> F32:
-    """Intensity of each sub-sample ray (..., 3): intersect with the board plane z_board = 0."""
-    n = pose.R[:, 2].astype(np.float32)  # plane normal in the rig frame
-    origin = (cam.c - pose.t).astype(np.float32)  # ray origin relative to the board origin
-    denom = rays @ n
+def _shade(x: F32, y: F32, cam: Camera, pose: BoardPose, square: float, lo: F64, hi: F64) -> F32:
+    """Intensity of each sub-sample with camera-frame ray (x, y, 1): intersect with the board plane
+    z_board = 0 (all vectors taken into the camera frame)."""
+    n = (cam.R_rc @ pose.R[:, 2]).astype(np.float32)  # plane normal
+    ax = (cam.R_rc @ pose.R[:, 0]).astype(np.float32)  # board x and y axes
+    ay = (cam.R_rc @ pose.R[:, 1]).astype(np.float32)
+    o = (cam.R_rc @ (cam.c - pose.t)).astype(np.float32)  # lens centre relative to the board origin
     with np.errstate(divide="ignore", invalid="ignore"):
-        lam = -(origin @ n) / denom
-    P = origin + lam[..., None] * rays  # rig-frame offsets from the board origin
-    bx = P @ pose.R[:, 0].astype(np.float32)
-    by = P @ pose.R[:, 1].astype(np.float32)
+        lam = -float(o @ n) / (x * n[0] + y * n[1] + n[2])
+    bx = float(o @ ax) + lam * (x * ax[0] + y * ax[1] + ax[2])
+    by = float(o @ ay) + lam * (x * ay[0] + y * ay[1] + ay[2])
     hit = (lam > 0) & (bx >= lo[0]) & (bx <= hi[0]) & (by >= lo[1]) & (by <= hi[1])
     kx, ky = np.floor(bx / square), np.floor(by / square)
     margin = -square - lo[0]
     on_squares = (bx >= -square) & (by >= -square) & (bx < hi[0] - margin) & (by < hi[1] - margin)
     black = on_squares & ((kx + ky) % 2 == 0)
-    val = np.where(black, BLACK, WHITE)
-    out: F32 = np.where(hit, val, BACKGROUND).astype(np.float32)
+    val = np.where(black, np.float32(BLACK), np.float32(WHITE))
+    out: F32 = np.where(hit, val, np.float32(BACKGROUND)).astype(np.float32)
     return out
