@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import json
 from typing import Any
 
 from tmeye.errors import UserError
+from tmeye.output import emit
 
 
 def parse_size(text: str) -> tuple[int, int]:
@@ -34,9 +34,5 @@ def run(args: argparse.Namespace) -> int:
     if args.frames < 10:
         raise UserError(f"--frames must be at least 10, got {args.frames}")
     report = run_bench(size, args.frames).to_json()
-    if args.json:
-        print(json.dumps(report))
-    else:
-        for k, v in report.items():
-            print(f"{k:22s} {v}")
+    emit(report, args.json)
     return 0

@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import json
 from typing import Any
 
 from tmeye.errors import UserError
+from tmeye.output import emit
 from tmeye.progress import Progress
 
 SPECIAL = {
@@ -52,11 +52,7 @@ def run(args: argparse.Namespace) -> int:
         result: dict[str, object] = run_calibration_scenario(seed=args.seed).to_json()
     else:
         result = _tracking(args)
-    if args.json:
-        print(json.dumps(result))
-    else:
-        for k, v in result.items():
-            print(f"{k:28s} {v}")
+    emit(result, args.json)
     return 0
 
 
