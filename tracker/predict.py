@@ -13,34 +13,35 @@ and the Markov switching probabilities are functions of dt.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from enum import StrEnum
 from typing import Protocol
 
 import numpy as np
-import scipy.linalg
-from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter, unscented_transform
-from numpy.typing import NDArray
+from filterpy.kalman import unscented_transform
 
-F64 = NDArray[np.float64]
-FX = Callable[[F64, float], F64]
+from tracker.motion import (
+    F64,
+    FX,
+    MotionModel,
+    _FastUKF,
+    _residual_z,
+    _sigma_points,
+    _z_mean,
+    cartesian_to_spherical,
+    fx_ct,
+    fx_cv,
+    hx_spherical,
+    spherical_to_cartesian,
+    wrap_angle,
+)
 
-
-def wrap_angle(a: float) -> float:
-    """Angle in radians wrapped to [-π, π)."""
-    return (a + math.pi) % (2.0 * math.pi) - math.pi
-
-
-def cartesian_to_spherical(p: F64) -> F64:
-    """World point (3,) in metres -> [r (m), θ (rad), φ (rad)]."""
-    x, y, z = float(p[0]), float(p[1]), float(p[2])
-    return np.array([math.sqrt(x * x + y * y + z * z), math.atan2(x, z), math.atan2(-y, math.hypot(x, z))])
-
-
-def spherical_to_cartesian(r: float, az: float, el: float) -> F64:
-    """[r, θ, φ] -> world point (3,): x = r cosφ sinθ, y = -r sinφ, z = r cosφ cosθ."""
-    return np.array([r * math.cos(el) * math.sin(az), -r * math.sin(el), r * math.cos(el) * math.cos(az)])
+__all__ = [
+    "CVPredictor", "F64", "FX", "IMMPredictor", "Measurement", "MotionModel", "PredictedState", "Predictor",
+    "PredictorConfig", "TrackEstimate", "TrackStatus", "UKFBankPredictor", "cartesian_to_spherical",
+    "spherical_to_cartesian", "stereo_sigmas", "wrap_angle",
+]
 
 
 @dataclass(frozen=True)
@@ -155,161 +156,6 @@ class Predictor(Protocol):
         ...
 
 
-# --- motion models ---------------------------------------------------------------------------------
-
-
-def fx_cv(s: F64, dt: float) -> F64:
-    """Constant velocity: p' = p + v dt, v' = v; a turn-rate state (if any) is carried unchanged."""
-    out = s.copy()
-    out[0:3] = s[0:3] + s[3:6] * dt  # p_k+1 = p_k + v_k dt
-    return out
-
-
-def fx_ct(s: F64, dt: float) -> F64:
-    """Coordinated turn at rate ω = s[6] (rad/s) in the horizontal x-z plane, constant vertical velocity:
-    the horizontal velocity rotates by ωdt (dvx/dt = ω vz, dvz/dt = -ω vx)."""
-    out = s.copy()
-    vx, vz, w = s[3], s[5], s[6]
-    wt = w * dt
-    if abs(wt) < 1e-6:
-        a, b = dt, 0.5 * w * dt * dt  # limits of sin(ωT)/ω and (1 - cos ωT)/ω as ω -> 0
-    else:
-        a, b = math.sin(wt) / w, (1.0 - math.cos(wt)) / w
-    c, sn = math.cos(wt), math.sin(wt)
-    out[0] = s[0] + a * vx + b * vz  # x' = x + sin(ωT)/ω vx + (1-cos ωT)/ω vz
-    out[1] = s[1] + s[4] * dt  # y' = y + vy T
-    out[2] = s[2] - b * vx + a * vz  # z' = z - (1-cos ωT)/ω vx + sin(ωT)/ω vz
-    out[3] = c * vx + sn * vz  # vx' = cos ωT vx + sin ωT vz
-    out[5] = -sn * vx + c * vz  # vz' = -sin ωT vx + cos ωT vz
-    return out
-
-
-def fx_cv_batch(S: F64, dt: float) -> F64:
-    """fx_cv for many states at once: S (N, n) -> (N, n)."""
-    out = S.copy()
-    out[:, 0:3] += S[:, 3:6] * dt
-    return out
-
-
-def fx_ct_batch(S: F64, dt: float) -> F64:
-    """fx_ct for many states at once: S (N, 7) -> (N, 7)."""
-    out = S.copy()
-    vx, vz, w = S[:, 3], S[:, 5], S[:, 6]
-    wt = w * dt
-    small = np.abs(wt) < 1e-6
-    w_safe = np.where(small, 1.0, w)
-    a = np.where(small, dt, np.sin(wt) / w_safe)  # sin(ωT)/ω -> T
-    b = np.where(small, 0.5 * w * dt * dt, (1.0 - np.cos(wt)) / w_safe)  # (1 - cos ωT)/ω -> ωT²/2
-    c, sn = np.cos(wt), np.sin(wt)
-    out[:, 0] = S[:, 0] + a * vx + b * vz
-    out[:, 1] = S[:, 1] + S[:, 4] * dt
-    out[:, 2] = S[:, 2] - b * vx + a * vz
-    out[:, 3] = c * vx + sn * vz
-    out[:, 5] = -sn * vx + c * vz
-    return out
-
-
-def hx_spherical_batch(S: F64) -> F64:
-    """h for many states: S (N, n) -> (N, 3) of [r, θ, φ]."""
-    x, y, z = S[:, 0], S[:, 1], S[:, 2]
-    rho = np.hypot(x, z)
-    return np.stack([np.sqrt(rho * rho + y * y), np.arctan2(x, z), np.arctan2(-y, rho)], axis=1)
-
-
-class _FastUKF(UnscentedKalmanFilter):  # type: ignore[misc]
-    """filterpy's UKF with the per-sigma-point Python loops replaced by array operations (the same
-    equations: χ' = f(χ), Z = h(χ'), P_xz = Σ W_c (χ' - x)(Z - z)ᵀ)."""
-
-    x: F64
-    P: F64
-
-    def __init__(self, dim_x: int, fx_batch: Callable[[F64, float], F64], *args: object, **kw: object):
-        super().__init__(dim_x, *args, **kw)
-        self.fx_batch = fx_batch
-
-    def compute_process_sigmas(self, dt: float, fx: object = None, **fx_args: object) -> None:
-        self.sigmas_f = self.fx_batch(self.points_fn.sigma_points(self.x, self.P), dt)
-
-    def cross_variance(self, x: F64, z: F64, sigmas_f: F64, sigmas_h: F64) -> F64:
-        dx = sigmas_f - x
-        dz = sigmas_h - z
-        dz[:, 1] = (dz[:, 1] + math.pi) % (2.0 * math.pi) - math.pi  # θ wrapped
-        return np.asarray((self.Wc[:, None] * dx).T @ dz)
-
-    def update(self, z: F64, R: F64 | None = None, UT: object = None, hx: object = None, **hx_args: object
-               ) -> None:
-        R = self.R if R is None else R
-        self.sigmas_h = hx_spherical_batch(self.sigmas_f)
-        zp = self.z_mean(self.sigmas_h, self.Wm)  # ẑ = Σ W_m Z (θ by its circular mean)
-        dz = self.sigmas_h - zp
-        dz[:, 1] = (dz[:, 1] + math.pi) % (2.0 * math.pi) - math.pi
-        self.S = (self.Wc[:, None] * dz).T @ dz + R  # S = Σ W_c (Z - ẑ)(Z - ẑ)ᵀ + R
-        self.SI = self.inv(self.S)
-        Pxz = self.cross_variance(self.x, zp, self.sigmas_f, self.sigmas_h)
-        self.K = Pxz @ self.SI  # Kalman gain
-        self.y = self.residual_z(z, zp)  # residual
-        self.x = self.x + self.K @ self.y
-        self.P = self.P - self.K @ self.S @ self.K.T
-        self.z = np.array(z, copy=True)
-        self.x_post, self.P_post = self.x.copy(), self.P.copy()
-        self._log_likelihood = self._likelihood = self._mahalanobis = None
-
-
-def q_white_accel(dt: float, psd: float) -> F64:
-    """Process noise (6, 6) of continuous white acceleration with spectral density psd (m²/s³) per axis:
-    per axis [[dt³/3, dt²/2], [dt²/2, dt]] psd, ordered [x, y, z, vx, vy, vz]."""
-    Q = np.zeros((6, 6))
-    i = np.arange(3)
-    Q[i, i] = psd * dt**3 / 3.0  # position variance
-    Q[i, i + 3] = Q[i + 3, i] = psd * dt**2 / 2.0  # position-velocity covariance
-    Q[i + 3, i + 3] = psd * dt  # velocity variance
-    return Q
-
-
-def hx_spherical(s: F64) -> F64:
-    """Measurement function h(s) = [r, θ, φ] of the position s[0:3]."""
-    return cartesian_to_spherical(s[0:3])
-
-
-def _residual_z(a: F64, b: F64) -> F64:
-    """z residual with θ wrapped to [-π, π) (φ stays within ±π/2)."""
-    y = a - b
-    y[1] = wrap_angle(float(y[1]))
-    return y
-
-
-def _z_mean(sigmas: F64, Wm: F64) -> F64:
-    """Weighted mean of measurement sigma points; θ by its circular mean so ±π does not average to 0."""
-    z: F64 = np.asarray(np.dot(Wm, sigmas), dtype=float)
-    z[1] = math.atan2(float(np.dot(Wm, np.sin(sigmas[:, 1]))), float(np.dot(Wm, np.cos(sigmas[:, 1]))))
-    return z
-
-
-@dataclass(frozen=True)
-class MotionModel:
-    """One model of the bank: transition fx(s, dt), white-acceleration psd (m²/s³), turn-rate random-walk
-    psd (rad²/s³, only used with 7 states) and the mean time (s) the target stays in this mode."""
-
-    name: str
-    fx: FX
-    accel_psd: float
-    turn_psd: float = 0.0
-    mean_sojourn_s: float = 4.0
-
-    @property
-    def fx_batch(self) -> Callable[[F64, float], F64]:
-        """fx over many states at once, (N, n) -> (N, n)."""
-        return _BATCH.get(self.fx, lambda S, dt: np.array([self.fx(s, dt) for s in S]))
-
-    def Q(self, dt: float, dim: int) -> F64:
-        """Process noise (dim, dim) for a step of dt seconds."""
-        Q = np.zeros((dim, dim))
-        Q[:6, :6] = q_white_accel(dt, self.accel_psd)
-        if dim == 7:
-            Q[6, 6] = self.turn_psd * dt  # random-walk turn rate: var grows as psd·dt
-        return Q
-
-
 @dataclass(frozen=True)
 class PredictorConfig:
     """Tuning shared by the predictors. init_speed_sigma (m/s) and init_turn_sigma (rad/s) are the 1-σ
@@ -318,21 +164,6 @@ class PredictorConfig:
     lost_after_s: float = 1.0
     init_speed_sigma: float = 6.0
     init_turn_sigma: float = 0.5
-
-
-class _FastMerwe(MerweScaledSigmaPoints):  # type: ignore[misc]
-    """Van der Merwe's sigma points, built with array operations: χ_0 = x, χ_±k = x ± U_k,
-    U = chol((λ + n) P) (upper triangular, rows k)."""
-
-    def sigma_points(self, x: F64, P: F64) -> F64:
-        lam = self.alpha**2 * (self.n + self.kappa) - self.n  # λ = α²(n + κ) - n
-        U = scipy.linalg.cholesky((lam + self.n) * P)  # upper: UᵀU = (λ + n) P
-        return np.vstack([x, x + U, x - U])
-
-
-def _sigma_points(n: int) -> MerweScaledSigmaPoints:
-    # α = 1, κ = 0 -> λ = 0: no negative weights, points at ±√n σ.
-    return _FastMerwe(n, alpha=1.0, beta=2.0, kappa=0.0)
 
 
 class UKFBankPredictor:
@@ -500,8 +331,6 @@ def _combine(xs: Sequence[F64], Ps: Sequence[F64], mu: F64) -> tuple[F64, F64]:
     P = sum(m * (Pj + np.outer(xj - x, xj - x)) for m, xj, Pj in zip(mu, xs, Ps, strict=True))
     return x, np.asarray(P)
 
-
-_BATCH: dict[FX, Callable[[F64, float], F64]] = {fx_cv: fx_cv_batch, fx_ct: fx_ct_batch}
 
 # Tuned on the seeded scenarios of tests/test_predict.py (targets 6-15 m away at 3-8 m/s, 30 Hz).
 CV_ACCEL_PSD = 4.0  # m²/s³: the CV baseline's best compromise between straight and turning flight
