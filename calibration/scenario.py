@@ -1,10 +1,20 @@
 """Calibration against simulated truth: render board views of tracker.sim.rig.default_rig(), detect,
 calibrate, and compare with the true cameras (used by `tmeye eval --scenario calibration`).
 
+The calibration procedure (procedure_poses): a 17x12 inner-corner board of 25 mm squares (an A2 print),
+VIEWS poses: two in three are stereo views with the whole board in both images at three distances
+(STEREO_DISTANCES_M, as the paper's §4 and eq. 4 need), one in three a close view (MONO_DISTANCES_M)
+filling one camera's image, anywhere in it including the corners, that the other camera sees only in
+part; every board is tilted 20-45° about a random in-plane axis. The joint adjustment shares the board
+poses between the cameras, so the single-camera views pin down each camera's principal point, which
+the stereo rotation otherwise trades against (a principal point shift of Δ px looks like a rotation of
+Δ/f rad).
+
 Corner noise: the views are rendered exactly (tracker.sim.boards, 4x4 anti-aliasing, 1 grey level of
 image noise) and the corners detected; the detector's own error against the true projections is
-measured, and Gaussian noise is added to the detected corners so that the total per-coordinate error is
-`corner_noise_px` (sqrt(σ² - σ_detector²)); the measured total is reported as corner_error_px."""
+measured, and Gaussian noise is added to the detected corners so that the total corner error is
+`corner_noise_px` RMS as a 2-D distance (OpenCV's RMS convention; per coordinate σ/√2, topped up from
+the detector's own error); the measured total is reported as corner_error_px."""
 
 from __future__ import annotations
 
@@ -30,6 +40,15 @@ TILT_DEG = (45.0, 45.0, 20.0)  # largest |δ|, |φ|, |γ| of a board view
 SPREAD = (0.36, 0.26)  # board centre x, y within ± this times the distance
 MONO_VIEWS = False  # let every other view show the whole board in one camera only
 IMAGE_NOISE = 1.0  # grey levels
+# The scenario's calibration procedure (procedure_poses); BOARD and sample_poses are the simpler 9x6
+# stereo-only views the CLI tests render.
+PROC_BOARD = BoardSpec(17, 12, 0.025)
+VIEWS = 60
+STEREO_DISTANCES_M = (0.65, 0.9, 1.2)
+MONO_DISTANCES_M = (0.45, 0.6)
+MONO_EVERY = 3  # every third view fills one camera's image (seen whole by that camera only)
+TILT_RANGE_DEG = (20.0, 45.0)  # board tilt about a random in-plane axis
+ROLL_DEG = 20.0  # and turned in its plane by up to this
 
 
 @dataclass
@@ -98,35 +117,79 @@ def _inside(p: F64, size: tuple[int, int], border: float = 12.0) -> bool:
     return bool(np.all((p >= border) & (p <= np.array(size) - 1 - border)))
 
 
-def render_views(rig: StereoRig, poses: list[BoardPose], rng: np.random.Generator) -> tuple[ViewSet, F64]:
-    """Render and detect every pose in both cameras. Returns the ViewSet (detected corners) and the true
-    corner projections (2, V, N, 2) px."""
-    V, N = len(poses), BOARD.n_corners
+def _axis_rotation(axis: F64, angle: float) -> F64:
+    k = axis / np.linalg.norm(axis)
+    K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    out: F64 = np.eye(3) + np.sin(angle) * K + (1.0 - np.cos(angle)) * (K @ K)
+    return out
+
+
+def procedure_poses(
+    rng: np.random.Generator, n: int, rig: StereoRig, mono_every: int = MONO_EVERY,
+    board: BoardSpec = PROC_BOARD,
+) -> list[BoardPose]:
+    """n board poses of the calibration procedure (module docstring): view k is a close single-camera
+    view when k % mono_every == mono_every - 1 (never when mono_every is 0), else a stereo view at
+    STEREO_DISTANCES_M[k % 3]. The board's centre is aimed at a uniformly drawn pixel of one camera; a
+    pose is kept when the whole board (plus a 12 px border) is inside the camera(s) it is meant for."""
+    cams = (rig.left, rig.right)
+    centre = np.array([(board.cols - 1) * board.square / 2, (board.rows - 1) * board.square / 2, 0.0])
+    poses: list[BoardPose] = []
+    while len(poses) < n:
+        k = len(poses)
+        mono = mono_every > 0 and k % mono_every == mono_every - 1
+        dists = MONO_DISTANCES_M if mono else STEREO_DISTANCES_M
+        z = dists[(k // mono_every if mono else k) % len(dists)] * rng.uniform(0.95, 1.05)
+        c = int(rng.integers(2))
+        w, h = cams[c].size
+        d = cams[c].rays_rig(np.array([rng.uniform(0, w)]), np.array([rng.uniform(0, h)]))[0]
+        a = rng.uniform(0.0, 2.0 * np.pi)
+        R = _axis_rotation(np.array([np.cos(a), np.sin(a), 0.0]), np.radians(rng.uniform(*TILT_RANGE_DEG)))
+        R = R @ euler_to_matrix(0.0, 0.0, np.radians(rng.uniform(-ROLL_DEG, ROLL_DEG)))
+        pose = BoardPose(R, cams[c].c + d / d[2] * z - R @ centre)
+        X = pose.corners_rig(board.cols, board.rows, board.square)
+        inside = [_inside(cam.project(X), cam.size) for cam in cams]
+        if (mono and inside[c] and not inside[1 - c]) or (not mono and all(inside)):
+            poses.append(pose)
+    return poses
+
+
+def render_views(
+    rig: StereoRig, poses: list[BoardPose], rng: np.random.Generator, board: BoardSpec = BOARD
+) -> tuple[ViewSet, F64]:
+    """Render and detect every pose in each camera whose image holds the whole board (a partly seen
+    board is never detected, so those images are not rendered). Returns the ViewSet (detected corners)
+    and the true corner projections (2, V, N, 2) px."""
+    V, N = len(poses), board.n_corners
     obs, truth = np.full((2, V, N, 2), np.nan), np.zeros((2, V, N, 2))
     seen = np.zeros((2, V), dtype=bool)
     for v, pose in enumerate(poses):
         for c, cam in enumerate((rig.left, rig.right)):
-            truth[c, v] = cam.project(pose.corners_rig(BOARD.cols, BOARD.rows, BOARD.square))
-            img = render_board(cam, BOARD.cols, BOARD.rows, BOARD.square, pose, noise_sigma=IMAGE_NOISE,
+            truth[c, v] = cam.project(pose.corners_rig(board.cols, board.rows, board.square))
+            if not _inside(truth[c, v], cam.size, 0.0):
+                continue
+            img = render_board(cam, board.cols, board.rows, board.square, pose, noise_sigma=IMAGE_NOISE,
                                rng=rng)
-            det = detect_board(img, BOARD)
+            det = detect_board(img, board)
             if det.corners is not None:
                 obs[c, v], seen[c, v] = det.corners, True
     names = [f"sim-{v:02d}" for v in range(V)]
-    return ViewSet(obs, seen, BOARD.object_points(), rig.left.size, names), truth
+    return ViewSet(obs, seen, board.object_points(), rig.left.size, names), truth
 
 
 def add_corner_noise(
     views: ViewSet, truth: F64, sigma: float, rng: np.random.Generator
 ) -> tuple[float, float]:
-    """Top the detector's error up to `sigma` px per coordinate; returns (detector, total) RMS per
-    coordinate against the truth, px."""
-    err = (views.obs - truth)[views.seen]
-    det = float(np.sqrt(np.mean(err**2)))
-    extra = np.sqrt(max(sigma**2 - det**2, 0.0))
+    """Top the detector's error up to a total corner error of `sigma` px RMS as a 2-D distance (per
+    coordinate sigma/√2); returns (detector, total) 2-D RMS corner errors against the truth, px."""
+
+    def rms2d() -> float:
+        return float(np.sqrt(np.mean(np.sum((views.obs - truth)[views.seen] ** 2, axis=-1))))
+
+    det = rms2d()
+    extra = np.sqrt(max(sigma**2 - det**2, 0.0) / 2.0)
     views.obs[views.seen] += rng.normal(0.0, extra, views.obs[views.seen].shape)
-    total = float(np.sqrt(np.mean((views.obs - truth)[views.seen] ** 2)))
-    return det, total
+    return det, rms2d()
 
 
 def _rotation_angle_deg(Ra: F64, Rb: F64) -> float:
@@ -152,8 +215,8 @@ def _figures_3d(est: F64, Xl: F64) -> tuple[float, float]:
     from calibration.evaluate import board_shape_rms
 
     err = float(np.mean(np.linalg.norm(est - Xl, axis=1)) * 1000.0)
-    n = BOARD.n_corners
-    shape = [board_shape_rms(est[i : i + n], BOARD.object_points()) for i in range(0, len(est), n)]
+    n = PROC_BOARD.n_corners
+    shape = [board_shape_rms(est[i : i + n], PROC_BOARD.object_points()) for i in range(0, len(est), n)]
     return err, float(np.mean(shape) * 1000.0)
 
 
@@ -190,19 +253,21 @@ def _polynomial_figures(
 
 
 def run_calibration_scenario(
-    seed: int = 0, views: int = 30, corner_noise_px: float = 0.1
+    seed: int = 0, views: int = VIEWS, corner_noise_px: float = 0.1
 ) -> CalibrationScenarioResult:
-    """Render `views` + HELD_OUT board poses of the default simulated rig, calibrate from the first
-    `views` with `corner_noise_px` (per coordinate) corner error, and compare with the truth."""
+    """Render `views` poses of the calibration procedure (procedure_poses) and HELD_OUT stereo views of
+    the default simulated rig, calibrate from the first `views` with `corner_noise_px` (2-D RMS) corner
+    error, and compare with the truth."""
     rng = np.random.default_rng(seed)
     true = default_rig()
-    poses = sample_poses(rng, views + HELD_OUT, true)
-    allv, truth = render_views(true, poses, rng)
+    poses = procedure_poses(rng, views, true) + procedure_poses(rng, HELD_OUT, true, mono_every=0)
+    allv, truth = render_views(true, poses, rng, PROC_BOARD)
     det_err, total = add_corner_noise(allv, truth, corner_noise_px, rng)
     train = allv.subset(np.arange(len(poses)) < views)
     held = allv.subset(np.arange(len(poses)) >= views)
-    truth_pts = np.stack([p.corners_rig(BOARD.cols, BOARD.rows, BOARD.square) for p in poses[views:]])
-    cal = calibrate_stereo(train, BOARD)
+    b = PROC_BOARD
+    truth_pts = np.stack([p.corners_rig(b.cols, b.rows, b.square) for p in poses[views:]])
+    cal = calibrate_stereo(train, PROC_BOARD)
     pl, pr, Xl = _held_out(true, held, truth_pts)
     models = {"pinhole": _pinhole_figures(cal, true, pl, pr, Xl)}
     if cal.polynomial is not None:
