@@ -88,7 +88,7 @@ class Pipeline:
         obs = np.array([[b.centroid_raw[0], b.centroid_raw[1], b.disparity] for b in blobs]).reshape(-1, 3)
         ids = self.tracker.update(frame.t, obs)
         self.subtractor.update_floor(self._foreground_low(blobs))
-        gain = float(np.median([b.gain for b in blobs])) if blobs else self._last_gain
+        gain = max(blobs, key=lambda b: b.area).gain if blobs else self._last_gain
         self._last_gain = gain
         self.subtractor.update_left_background(frame, [(b.box, b.mask) for b in blobs], gain)
         t4 = time.perf_counter()

@@ -337,3 +337,31 @@ def match_region(
     if fit is None:
         return None
     return RegionMatch(disparity=fit.d, sigma=fit.sigma, score=fit.score, gain=fit.gain)
+
+
+def refine_region(
+    left: U8, right: U8, mask: NDArray[np.generic], x0: int, y0: int, d0: float, *, min_score: float = 0.5
+) -> RegionMatch | None:
+    """Like match_region with a good prior d0 (within about a pixel, e.g. a track's prediction): the
+    Gauss-Newton refinement starts at d0 with no integer search. None when it leaves d0 ± 1 px, the fit
+    degenerates or scores below min_score (then search with match_region)."""
+    left, right = _check_images(left, right, 0)
+    if not math.isfinite(d0) or d0 < 0:
+        raise ValueError(f"d0 must be finite and >= 0, got {d0}")
+    m = np.asarray(mask)
+    wgt = (m != 0) if not np.issubdtype(m.dtype, np.floating) else np.clip(np.nan_to_num(m), 0.0, 1.0)
+    mh, mw = m.shape
+    lo, hi = max(0, math.floor(d0) - 3), math.ceil(d0) + 3
+    if x0 - hi - _PAD < 0 or x0 + mw + _PAD > left.shape[1] or y0 < 0 or y0 + mh > left.shape[0]:
+        return None
+    if float(wgt.sum()) < 8.0:
+        return None
+    T = left[y0 : y0 + mh, x0 : x0 + mw].astype(np.float32)
+    xs0 = x0 - hi - _PAD
+    S = right[y0 : y0 + mh, xs0 : x0 + mw - lo + _PAD].astype(np.float32)
+    offset = hi + _PAD  # strip position p <-> disparity d = offset - p
+    p0 = offset - d0
+    fit = _refine(T, S, wgt.astype(np.float64).ravel(), p0, math.floor(p0))
+    if fit is None or abs(fit.d + p0) > 1.0 or fit.score < min_score:
+        return None
+    return RegionMatch(disparity=offset + fit.d, sigma=fit.sigma, score=fit.score, gain=fit.gain)

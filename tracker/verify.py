@@ -19,7 +19,7 @@ from tracker.bgdepth import CorrespondenceMap
 from tracker.detect import Box, StereoSubtractor
 from tracker.frames import StereoFrame
 from tracker.rectify import Rectifier
-from tracker.stereo import RegionMatch, match_region
+from tracker.stereo import RegionMatch, match_region, refine_region
 
 U8 = NDArray[np.uint8]
 F64 = NDArray[np.float64]
@@ -308,4 +308,8 @@ class _Strips:
         core = cv2.erode((wgt > 0.99).astype(np.uint8), _CORE)
         if int(np.count_nonzero(core)) < 8:
             core = (wgt > 0.5).astype(np.uint8)
+        if d0 is not None:  # a good prior: refine from it, search around it only if that fails
+            fit = refine_region(self.left, self.right, core, self.off, 0, d0)
+            if fit is not None:
+                return fit
         return match_region(self.left, self.right, core, self.off, 0, self.d_hi, d0, search_radius=radius)
