@@ -156,7 +156,7 @@ class StereoSubtractor:
         return None if self.moving else self.left_bg.get(self._pose(gimbal))
 
     def update_left_background(self, frame: StereoFrame, objects: list[tuple[Box, NDArray[np.bool_]]],
-                               gain: float, stripes: int = 16, alpha: float = 0.25) -> None:
+                               gain: float, stripes: int = 24, alpha: float = 0.3) -> None:
         """Adapt the temporal background B ← B + α (Γ/g - B) on one horizontal stripe per frame (each
         row every `stripes` frames), away from objects; g is the global gain of this frame."""
         model = self.left_background(frame.gimbal)

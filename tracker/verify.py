@@ -204,13 +204,15 @@ class Verifier:
         if fine is None:
             return None
         ys, xs = np.nonzero(obj)
-        d_bg = float(np.median(cm.disparity[ys[::7], xs[::7]]))
+        c_raw = np.array([xs.mean() + x0, ys.mean() + y0])  # eq. (10), c(i, j) = the object mask
+        # the background right behind the object's centre (or, for a ring-shaped object, its nearest pixel)
+        iy, ix = int(c_raw[1]) - y0, int(c_raw[0]) - x0
+        d_bg = float(cm.disparity[iy, ix] if obj[iy, ix] else cm.disparity[ys[0], xs[0]])
         if fine.disparity < d_bg * (1.0 + cfg.min_depth_gap) + cfg.min_disparity_gap_px:
             return None  # not in front of the background: a misregistered background patch
         rc = self.rect.rect_of_raw[0][y0:y1, x0:x1][ys, xs].astype(np.float64)
         a = self.rect.area_of_raw[y0:y1, x0:x1][ys, xs].astype(np.float64)
         c_rect = (a @ rc) / a.sum()  # eq. (10) in rectified coordinates, pixels weighted by their area
-        c_raw = np.array([xs.mean() + x0, ys.mean() + y0])  # eq. (10), c(i, j) = the object mask
         return Blob(box, obj, int(xs.size), c_raw, c_rect, fine.disparity, fine.sigma, d_bg, fine.score, gain)
 
     def _outline_stereo(self, frame: StereoFrame, box: Box, m_left: BoolA,
@@ -237,10 +239,13 @@ class Verifier:
         """Rectified left/right strips around a region's rows, wide enough for the disparity search."""
         rect, cfg = self.rect, self.cfg
         x0, y0, x1, y1 = box
-        ys, xs = np.nonzero(region)
-        if xs.size < 8:
+        bx, by, bw, bh = cv2.boundingRect(region.view(np.uint8))
+        if bw * bh < 8:
             return None
-        rc = rect.rect_of_raw[0][y0:y1, x0:x1][ys, xs]
+        # the region's box in rectified coordinates: its corners and edge midpoints (the lens bends edges)
+        gx = np.array([bx, bx + bw // 2, bx + bw - 1] * 3)
+        gy = np.repeat([by, by + bh // 2, by + bh - 1], 3)
+        rc = rect.rect_of_raw[0][y0 + gy, x0 + gx]
         w, h = rect.rig.left.size
         rx0, ry0 = int(np.floor(rc[:, 0].min())), max(int(np.floor(rc[:, 1].min())), 0)
         rx1, ry1 = int(np.ceil(rc[:, 0].max())) + 1, min(int(np.ceil(rc[:, 1].max())) + 1, h)
