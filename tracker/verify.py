@@ -163,6 +163,8 @@ class Verifier:
             found.append(blob)
             # a second object in the same box must be substantial: not the rim left around the first
             min_area = max(min_area, 4 * cfg.min_area_px, blob.area // 10)
+            if len(found) == max_objects or int(np.count_nonzero(m_raw & ~m_left)) < min_area:
+                break
             taken = _taken(blob)
             m_raw, free = m_raw & ~taken, free & ~taken
         return found
