@@ -12,7 +12,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from tracker.geometry import Camera, StereoRig
+from tracker.geometry import StereoRig
 
 F32 = NDArray[np.float32]
 F64 = NDArray[np.float64]
@@ -111,10 +111,3 @@ class Rectifier:
         x = self.f * Xr[:, 0] / Xr[:, 2] + self.cx
         y = self.f * Xr[:, 1] / Xr[:, 2] + self.cy
         return x, y, self.f * self.b / Xr[:, 2]
-
-    def raw_of_rect(self, side: int, x: F64, y: F64) -> tuple[F64, F64]:
-        """Rectified points of camera `side` -> its raw (distorted) pixel coordinates."""
-        cam: Camera = self.rig.left if side == 0 else self.rig.right
-        Rk = self.R1 if side == 0 else self.R2
-        m = np.stack([(x - self.cx) / self.f, (y - self.cy) / self.f, np.ones_like(x)], axis=-1) @ Rk
-        return cam.distort_normalized(m[..., 0] / m[..., 2], m[..., 1] / m[..., 2])

@@ -169,14 +169,6 @@ class Verifier:
             m_raw, free = m_raw & ~taken, free & ~taken
         return found
 
-    def verify(self, frame: StereoFrame, box: Box, d_hint: float | None = None) -> Blob | None:
-        """Verify the largest object of one candidate box. d_hint: the disparity expected from a track."""
-        x0, y0, _, _ = box
-        cx, cy = (box[0] + box[2]) / 2.0, (box[1] + box[3]) / 2.0
-        hints = None if d_hint is None else np.array([[cx, cy, d_hint]])
-        blobs = self.verify_all(frame, box, hints, max_objects=1)
-        return blobs[0] if blobs else None
-
     def _verify_region(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap, m_left: BoolA,
                        d_hint: float | None, free: BoolA) -> Blob | None:
         """Verify one connected region of the left-key mask inside a box."""
