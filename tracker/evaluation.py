@@ -102,7 +102,8 @@ def score_frame(acc: _Acc, res: FrameResult, truth: FrameTruth, pipe: Pipeline, 
     acc.tp, acc.fp, acc.fn = acc.tp + tp, acc.fp + fp, acc.fn + fn
     acc.f1_frames.append(_f1(tp, fp, fn) if tp + fp + fn else 1.0)
     tt = truth.target(1)
-    visible = tt is not None and tt.centroid_left is not None and tt.area_left >= min_area
+    # the rig sees the target when both cameras do (a target only the left camera sees has no disparity)
+    visible = tt is not None and tt.centroid_left is not None and min(tt.area_left, tt.area_right) >= min_area
     prim = res.primary
     if prim is not None and not any(_on(prim, o) for o in truth.targets):
         acc.false_target += 1  # the reported primary target is on no real object

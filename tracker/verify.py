@@ -249,6 +249,9 @@ class Verifier:
         rx0, rx1 = max(rx0, cx - _MATCH_HALF[0]), min(rx1, cx + _MATCH_HALF[0])
         ry0, ry1 = max(ry0, cy - _MATCH_HALF[1]), min(ry1, cy + _MATCH_HALF[1])
         d_hi = cfg.max_disparity if d_hint is None else int(np.ceil(d_hint)) + 8
+        # near the left edge the search range runs out of image: keep at least 8 columns of the region
+        # (its right part) and search as far as the image allows
+        rx0 = max(rx0, min(d_hi + 3, rx1 - 8))
         d_hi = min(d_hi, rx0 - 3)
         if d_hi < 3 or rx1 + 2 > w or ry1 <= ry0:
             return None

@@ -25,7 +25,7 @@ U8 = NDArray[np.uint8]
 @dataclass(frozen=True)
 class TargetTruth:
     """Truth for one moving object in one frame. Positions in metres; pixel coordinates distorted (raw).
-    centroid_*: eq. (10) over the object's visible pixels (None when not visible)."""
+    centroid_*: eq. (10) over the object's visible pixels (None when not visible); area_*: those pixels."""
 
     target_id: int
     world: F64
@@ -36,6 +36,7 @@ class TargetTruth:
     centroid_right: F64 | None
     area_left: int
     visible_fraction: float
+    area_right: int = 0
 
 
 @dataclass(frozen=True)

@@ -189,7 +189,7 @@ class SimRig:
         pl = self.rig.left.project(rig_p[None, :])[0]
         pr = self.rig.right.project(rig_p[None, :])[0]
         cents: list[F64 | None] = []
-        area = 0
+        areas = [0, 0]
         for k, img in enumerate(ids):
             win = self.renderer.windows[k]
             if win is None:
@@ -197,9 +197,9 @@ class SimRig:
                 continue
             x0, y0, x1, y1 = win  # moving objects are only ever drawn inside this window
             m = cv2.moments((img[y0:y1, x0:x1] == tid).view(np.uint8), binaryImage=True)
-            if k == 0:
-                area = int(m["m00"])
+            areas[k] = int(m["m00"])
             cents.append(np.array([m["m10"] / m["m00"] + x0, m["m01"] / m["m00"] + y0])
                          if m["m00"] > 0 else None)
         expected = np.pi * (self.rig.left.f * 0.3 / max(rig_p[2], 0.1)) ** 2
-        return TargetTruth(tid, world, rig_p, pl, pr, cents[0], cents[1], area, min(area / expected, 1.0))
+        return TargetTruth(tid, world, rig_p, pl, pr, cents[0], cents[1], areas[0],
+                           min(areas[0] / expected, 1.0), areas[1])
