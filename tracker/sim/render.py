@@ -77,10 +77,11 @@ def _make_view(cam: Camera) -> _View:
                  (float(yn.min()) - 0.02, float(yn.max()) + 0.02), xy, ray_len)
 
 
-def _cast_plane_fast(view: _View, R_wr: F64, s: Surface, img: F32, depth: F32) -> None:
-    """Ray-cast a static rectangular surface over its bounding box with OpenCV calls: on a plane the
-    texture coordinates are a homography of the undistorted normalised coordinates (x_n, y_n), and
-    1/depth is linear in them. Same result as _cast_surface, about 30x faster for large areas."""
+def _cast_plane_fast(view: _View, R_wr: F64, s: Surface, img: F32 | U8, depth: F32, t: float = 0.0,
+                     ids: U8 | None = None) -> None:
+    """Ray-cast a rectangular surface over its bounding box with OpenCV calls: on a plane the texture
+    coordinates are a homography of the undistorted normalised coordinates (x_n, y_n), and 1/depth is
+    linear in them. Same result as _cast_surface (sway included), many times faster for large areas."""
     box = _pixel_box(view, s.corners() @ R_wr)
     if box is None:
         return
@@ -96,17 +97,24 @@ def _cast_plane_fast(view: _View, R_wr: F64, s: Surface, img: F32, depth: F32) -
                    q * v_c / s.texel_m + (b0 / s.texel_m + th / 2.0) * n_c, n_c])
     xy = view.xy[y0:y1, x0:x1]
     mxy = np.asarray(cv2.perspectiveTransform(xy.reshape(-1, 1, 2), H), np.float32).reshape(xy.shape)
-    val = cv2.remap(s._tex32, mxy, None, cv2.INTER_LINEAR,  # type: ignore[call-overload]
-                    borderMode=cv2.BORDER_REFLECT101)
     hw, hh = s.half_w / s.texel_m, s.half_h / s.texel_m
     hit = cv2.inRange(mxy, (tw / 2.0 - hw, th / 2.0 - hh), (tw / 2.0 + hw, th / 2.0 + hh)) > 0
+    if s.sway is not None:  # texture displacement in metres at plane coordinates (a, b)
+        a = (mxy[..., 0] - np.float32(tw / 2.0)) * np.float32(s.texel_m)
+        b = (mxy[..., 1] - np.float32(th / 2.0)) * np.float32(s.texel_m)
+        da, db = s.sway(t, a, b)
+        mxy = np.dstack([mxy[..., 0] + da / np.float32(s.texel_m), mxy[..., 1] + db / np.float32(s.texel_m)])
+    val = cv2.remap(s._tex32, mxy.astype(np.float32), None, cv2.INTER_LINEAR,  # type: ignore[call-overload]
+                    borderMode=cv2.BORDER_REFLECT101)
     den = n_c[0] * xy[..., 0] + n_c[1] * xy[..., 1] + np.float32(n_c[2])
     with np.errstate(divide="ignore"):
         dist = (np.float32(q) / den) * view.ray_len[y0:y1, x0:x1]
     d_roi = depth[y0:y1, x0:x1]
     hit &= (dist > 0.05) & (dist < d_roi)
     np.copyto(d_roi, dist, where=hit)
-    np.copyto(img[y0:y1, x0:x1], val, where=hit)
+    np.copyto(img[y0:y1, x0:x1], np.rint(val) if img.dtype == np.uint8 else val, where=hit, casting="unsafe")
+    if ids is not None:
+        ids[y0:y1, x0:x1][hit] = s.target_id
 
 
 def _pixel_box(view: _View, pts_rig: F64, pad: int = 2) -> tuple[int, int, int, int] | None:
@@ -246,7 +254,10 @@ class SimRenderer:
         depth = self._depth[k]
         np.copyto(depth, base_depth)
         for s in moving:
-            _cast_surface(view, R_wr, s, t, img8, depth, ids)
+            if s.shape == "rect":  # foliage: the homography path
+                _cast_plane_fast(view, R_wr, s, img8, depth, t, ids)
+            else:
+                _cast_surface(view, R_wr, s, t, img8, depth, ids)
         x0, y0 = min(b[0] for b in boxes), min(b[1] for b in boxes)
         x1, y1 = max(b[2] for b in boxes), max(b[3] for b in boxes)
         self.windows[k] = (x0, y0, x1, y1)

@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 F64 = NDArray[np.float64]
+FA = NDArray[np.floating]  # float32 or float64 arrays
 U8 = NDArray[np.uint8]
 
 CAMERA_HEIGHT_M = 1.5
@@ -49,7 +50,7 @@ class Surface:
     shape: str = "rect"
     moving: bool = False
     target_id: int = 0  # > 0 for objects whose pixels are foreground in the ground truth
-    sway: Callable[[float, F64, F64], tuple[F64, F64]] | None = None
+    sway: Callable[[float, FA, FA], tuple[FA, FA]] | None = None
     _tex32: NDArray[np.float32] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -143,7 +144,7 @@ def backdrop(rng: np.random.Generator) -> list[Surface]:
 
 def foliage(rng: np.random.Generator, centre: F64, half_w: float, half_h: float) -> Surface:
     """A swaying bush: a textured patch whose texture moves with a spatially varying sine (wind)."""
-    def sway(t: float, a: F64, b: F64) -> tuple[F64, F64]:
+    def sway(t: float, a: FA, b: FA) -> tuple[FA, FA]:
         # leaves sway sideways more at the top (b = -half_h) than at the root, with a travelling phase
         b32 = b.astype(np.float32)
         s = np.sin(np.float32(2.0 * np.pi * 0.7 * t) + np.float32(3.0) * b32)
