@@ -73,3 +73,29 @@ def test_second_object_and_foreground_ids() -> None:
     sf = sim.step()
     ids = set(np.unique(sf.truth.ids_left))
     assert {1, 2} <= ids
+
+
+def test_fast_renderer_matches_exact_ray_casting() -> None:
+    from tracker.geometry import gimbal_rotation
+    from tracker.sim import render
+
+    sim = SimRig(get_scenario("foliage"), noise_sigma=0.0)
+    view = sim.renderer.views[0]
+    R = gimbal_rotation(3.0, -1.0)
+    surfaces = [*sim.renderer.static, *(o.surface(0.5, R) for o in sim.objects)]
+    assert sim._foliage is not None
+    surfaces.append(sim._foliage)
+    h, w = 480, 640
+    for t in (0.0, 1.3):
+        a, b = np.zeros((h, w), np.uint8), np.zeros((h, w), np.uint8)
+        da, db = np.full((h, w), np.inf, np.float32), np.full((h, w), np.inf, np.float32)
+        ia, ib = np.zeros((h, w), np.uint8), np.zeros((h, w), np.uint8)
+        for s in surfaces:
+            render.cast_surface_exact(view, R, s, t, a, da, ia)
+            render._cast_plane_fast(view, R, s, b, db, t, ib)
+        diff = np.abs(a.astype(int) - b.astype(int))
+        assert (diff > 1).mean() < 1e-4  # a few pixels exactly on an edge may fall either way
+        assert (ia != ib).mean() < 1e-4
+        finite = np.isfinite(da)
+        assert np.array_equal(finite, np.isfinite(db))
+        assert np.allclose(da[finite], db[finite], rtol=1e-4)

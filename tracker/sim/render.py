@@ -78,11 +78,11 @@ def _make_view(cam: Camera) -> _View:
 
 
 def _cast_plane_fast(view: _View, R_wr: F64, s: Surface, img: F32 | U8, depth: F32, t: float = 0.0,
-                     ids: U8 | None = None) -> None:
+                     ids: U8 | None = None, box: tuple[int, int, int, int] | None = None) -> None:
     """Ray-cast a rectangular surface over its bounding box with OpenCV calls: on a plane the texture
     coordinates are a homography of the undistorted normalised coordinates (x_n, y_n), and 1/depth is
-    linear in them. Same result as _cast_surface (sway included), many times faster for large areas."""
-    box = _pixel_box(view, s.corners() @ R_wr)
+    linear in them. Same result as cast_surface_exact (sway included), many times faster for large areas."""
+    box = box or _pixel_box(view, s.corners() @ R_wr)
     if box is None:
         return
     x0, y0, x1, y1 = box
@@ -98,7 +98,11 @@ def _cast_plane_fast(view: _View, R_wr: F64, s: Surface, img: F32 | U8, depth: F
     xy = view.xy[y0:y1, x0:x1]
     mxy = np.asarray(cv2.perspectiveTransform(xy.reshape(-1, 1, 2), H), np.float32).reshape(xy.shape)
     hw, hh = s.half_w / s.texel_m, s.half_h / s.texel_m
-    hit = cv2.inRange(mxy, (tw / 2.0 - hw, th / 2.0 - hh), (tw / 2.0 + hw, th / 2.0 + hh)) > 0
+    if s.shape == "disc":
+        ex, ey = mxy[..., 0] - np.float32(tw / 2.0), mxy[..., 1] - np.float32(th / 2.0)
+        hit = ex * ex + ey * ey <= np.float32(hw * hw)
+    else:
+        hit = cv2.inRange(mxy, (tw / 2.0 - hw, th / 2.0 - hh), (tw / 2.0 + hw, th / 2.0 + hh)) > 0
     if s.sway is not None:  # texture displacement in metres at plane coordinates (a, b)
         a = (mxy[..., 0] - np.float32(tw / 2.0)) * np.float32(s.texel_m)
         b = (mxy[..., 1] - np.float32(th / 2.0)) * np.float32(s.texel_m)
@@ -139,10 +143,11 @@ def _pixel_box(view: _View, pts_rig: F64, pad: int = 2) -> tuple[int, int, int, 
     return box if box[0] < box[2] and box[1] < box[3] else None
 
 
-def _cast_surface(view: _View, R_wr: F64, s: Surface, t: float, img: F32 | U8, depth: F32, ids: U8 | None,
+def cast_surface_exact(view: _View, R_wr: F64, s: Surface, t: float, img: F32 | U8, depth: F32, ids: U8 | None,
                   origin: tuple[int, int] = (0, 0)) -> None:
-    """Ray-cast one surface into img/depth/ids (in place), z-tested. The buffers cover the image window
-    whose top-left pixel is `origin`; only the surface's projected bounding box is cast."""
+    """Ray-cast one surface into img/depth/ids (in place), z-tested, intersecting every pixel's ray with
+    the plane: the reference the fast renderer (_cast_plane_fast) is tested against. The buffers cover
+    the image window whose top-left pixel is `origin`; only the surface's bounding box is cast."""
     box = _pixel_box(view, s.corners() @ R_wr)  # world -> rig is R_wr.T @ p (row vectors)
     if box is None:
         return
@@ -204,10 +209,7 @@ class SimRenderer:
             img = np.zeros((h, w), np.float32)
             depth = np.full((h, w), np.inf, np.float32)
             for surface in self.static:
-                if surface.shape == "rect" and surface.sway is None:
-                    _cast_plane_fast(view, R_wr, surface, img, depth)
-                else:
-                    _cast_surface(view, R_wr, surface, 0.0, img, depth, None)
+                _cast_plane_fast(view, R_wr, surface, img, depth)
             imgs.append(np.clip(np.round(img), 0, 255).astype(np.uint8))
             depths.append(depth)
         if len(self._cache) >= 4:
@@ -247,17 +249,15 @@ class SimRenderer:
                      base_depth: F32, ids: U8) -> None:
         """Cast moving surfaces into a copy of the static depth, only over their bounding boxes."""
         view = self.views[k]
-        boxes = [b for b in (_pixel_box(view, s.corners() @ R_wr) for s in moving) if b is not None]
+        cast = [(s, b) for s, b in ((s, _pixel_box(view, s.corners() @ R_wr)) for s in moving) if b is not None]
         self.windows[k] = None
-        if not boxes:
+        if not cast:
             return
         depth = self._depth[k]
         np.copyto(depth, base_depth)
-        for s in moving:
-            if s.shape == "rect":  # foliage: the homography path
-                _cast_plane_fast(view, R_wr, s, img8, depth, t, ids)
-            else:
-                _cast_surface(view, R_wr, s, t, img8, depth, ids)
+        for s, b in cast:
+            _cast_plane_fast(view, R_wr, s, img8, depth, t, ids, b)
+        boxes = [b for _, b in cast]
         x0, y0 = min(b[0] for b in boxes), min(b[1] for b in boxes)
         x1, y1 = max(b[2] for b in boxes), max(b[3] for b in boxes)
         self.windows[k] = (x0, y0, x1, y1)

@@ -52,14 +52,16 @@ class Surface:
     target_id: int = 0  # > 0 for objects whose pixels are foreground in the ground truth
     sway: Callable[[float, FA, FA], tuple[FA, FA]] | None = None
     _tex32: NDArray[np.float32] = field(init=False, repr=False)
+    _normal: F64 = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         self._tex32 = self.texture.astype(np.float32)
+        n = np.cross(self.u, self.v)
+        self._normal = np.asarray(n / np.linalg.norm(n), dtype=np.float64)
 
     @property
     def normal(self) -> F64:
-        n = np.cross(self.u, self.v)
-        return np.asarray(n / np.linalg.norm(n), dtype=np.float64)
+        return self._normal
 
     def corners(self) -> F64:
         """The patch's four corners (or its bounding square for a disc), shape (4, 3)."""
