@@ -78,3 +78,14 @@ def test_missing_camera_device_is_named(tmp_path: Path) -> None:
     save_rig(default_rig(), rig)
     out = tmeye("track", "--source", "usb", "/dev/video98", "/dev/video99", "--rig", str(rig))
     assert out.returncode == 2 and "/dev/video98" in out.stderr
+
+
+def test_rig_of_another_image_size_is_named(tmp_path: Path) -> None:
+    from tracker.geometry import save_rig
+    from tracker.sim.rig import default_rig
+
+    rig = tmp_path / "rig320.json"
+    save_rig(default_rig((320, 240)), rig)
+    out = tmeye("track", "--rig", str(rig), "--frames", "2", "--fast")
+    assert out.returncode == 2 and "does not match the rig's (320, 240)" in out.stderr
+    assert "Traceback" not in out.stderr

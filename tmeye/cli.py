@@ -6,6 +6,8 @@ import argparse
 import importlib
 import sys
 
+import cv2
+
 from tmeye.errors import UserError
 
 __all__ = ["UserError", "build_parser", "main"]
@@ -35,6 +37,10 @@ def main(argv: list[str] | None = None) -> int:
         code = args.func(args)
     except (UserError, ValueError, FileNotFoundError, OSError) as exc:
         print(f"tmeye {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except cv2.error as exc:  # a backstop: inputs OpenCV refused that no check above caught
+        reason = str(exc).strip().splitlines()[-1] if str(exc).strip() else type(exc).__name__
+        print(f"tmeye {args.command}: error: OpenCV refused the input: {reason}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         return 130

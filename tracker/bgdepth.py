@@ -14,7 +14,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from tracker.frames import GimbalState, StereoFrame
+from tracker.frames import FrameError, GimbalState, StereoFrame, check_pair
 from tracker.geometry import Camera, gimbal_rotation
 from tracker.rectify import Rectifier
 
@@ -69,8 +69,13 @@ class BackgroundDepth:
     # -- learning ---------------------------------------------------------------------------------
     def learn(self, frame: StereoFrame, max_disparity: int | None = None) -> int:
         """Add an empty-scene pair to the panorama by semi-global matching on the rectified pair.
-        Returns the number of background points learnt."""
+        Returns the number of background points learnt. Raises FrameError for a pair that is not grey
+        uint8 of the rig's size."""
         rect = self.rect
+        check_pair(frame.left, frame.right)
+        if frame.left.shape[::-1] != rect.rig.left.size:
+            raise FrameError(f"background frame size {frame.left.shape[::-1]} does not match the rig's "
+                             f"{rect.rig.left.size}")
         lr, rr = rect.rectify(frame.left, 0), rect.rectify(frame.right, 1)
         nd = max_disparity or int(16 * np.ceil(rect.f * rect.b / 2.5 / 16))
         sgbm = cv2.StereoSGBM.create(minDisparity=0, numDisparities=nd, blockSize=5, P1=8 * 25, P2=32 * 25,

@@ -5,8 +5,9 @@ Per frame:
    image Θ warped by the background correspondence, m = |Γ(x, y) - Θ(x', y')| > ε + B(x, y), eq. (9).
    B is the temporal part: a per-pixel floor of the stereo residual that falls at once and rises slowly,
    so places where the background warp is imperfect (half-occlusions, aliasing) are learnt away, objects
-   that stop merge into the background after `absorb_s`, and a background that reappears is usable in the
-   next frame. A global change of light scales Γ and Θ alike and leaves m unchanged.
+   that stop merge into the background (within `absorb_s` for residuals up to 100 grey levels: under an
+   object the floor rises one level every absorb_s·fps/100 frames), and a background that reappears is
+   usable in the next frame. A global change of light scales Γ and Θ alike and leaves m unchanged.
 2. Verification at full resolution inside each candidate's box (tracker.verify).
 """
 
@@ -97,6 +98,7 @@ class StereoSubtractor:
         self._fg_every = max(1, round(self.cfg.absorb_s * self.cfg.fps / 100.0))
         self._count = 0
         self.moving = False
+        self._frame_pose: tuple[float, float] | None = None  # pose of the last frame stepped
         self._pending: tuple[U8, bool] | None = None
         # temporal model per pose: background B and mean absolute deviation D, at gain 1
         self.left_bg: dict[tuple[float, float], tuple[NDArray[np.float32], NDArray[np.float32]]] = {}
@@ -138,11 +140,11 @@ class StereoSubtractor:
         residual floor from the survey (BackgroundDepth's floor canvas) where the cameras are now."""
         pose = self._pose(frame.gimbal)
         self.left_bg[pose] = (frame.left.astype(np.float32), np.zeros(frame.left.shape, np.float32))
-        if self._maps is None or self._maps.pose == pose:
-            pm = self.maps(frame.gimbal)
-            self.floor = pm.low.floor.copy()
-            for key in (0, 1):  # the full-resolution maps now, not on the first frame
-                pm.full[key] = self.bg.correspondence(key, frame.gimbal)
+        pm = self.maps(frame.gimbal)
+        self.floor = pm.low.floor.copy()
+        self._frame_pose = None  # the next frame is the first: not "moving"
+        for key in (0, 1):  # the full-resolution maps now, not on the first frame
+            pm.full[key] = self.bg.correspondence(key, frame.gimbal)
 
     @staticmethod
     def _pose(gimbal: GimbalState | None) -> tuple[float, float]:
@@ -190,16 +192,17 @@ class StereoSubtractor:
         if frame.left.shape[::-1] != self.bg.rect.rig.left.size:
             raise ValueError(f"frame size {frame.left.shape[::-1]} does not match the rig's "
                              f"{self.bg.rect.rig.left.size}")
-        prev = self._maps.pose if self._maps is not None else None
-        pm = self.maps(frame.gimbal)
+        prev, pm = self._frame_pose, self.maps(frame.gimbal)
         moving = prev is not None and prev != pm.pose
+        if prev != pm.pose:  # new pose: start from the survey's floor there (the old one is misplaced)
+            self.floor = pm.low.floor.copy()
+        self._frame_pose = pm.pose
         self.moving = moving
         s = self.cfg.stride
         key = frame.left[::s, ::s] if s > 1 else frame.left
         ref = cv2.remap(frame.right, pm.low_fixed, None, cv2.INTER_NEAREST)  # type: ignore[call-overload]
         resid = np.asarray(cv2.absdiff(key, ref), np.uint8)  # |Γ(x, y) - Θ(x', y')|, eq. (9)
-        floor = cv2.max(self.floor, pm.low.floor) if moving else self.floor  # the survey's, while moving
-        excess = cv2.subtract(resid, floor)
+        excess = cv2.subtract(resid, self.floor)
         fg = np.asarray(cv2.threshold(excess, self.cfg.epsilon, 255, cv2.THRESH_BINARY)[1], np.uint8)
         cv2.bitwise_and(fg, pm.valid_u8, dst=fg)
         boxes = self._boxes(fg)

@@ -146,7 +146,7 @@ def run_scenario(name: str, frames: int | None = None, seed: int = 0, rig: Stere
     acc = _Acc()
     min_area = pipe.subtractor.cfg.min_area_px
     # OpenCV's MOG2 on the same left images, for comparison where the light changes
-    mog = cv2.createBackgroundSubtractorMOG2(detectShadows=False) if _has_steps(scenario.gain, n) else None
+    mog = cv2.createBackgroundSubtractorMOG2(detectShadows=False) if _steps(scenario.gain, n, scenario.fps) else None
     if mog is not None:
         empty = sim.background().left
         for _ in range(30):
@@ -167,11 +167,12 @@ def run_scenario(name: str, frames: int | None = None, seed: int = 0, rig: Stere
                                    int(np.count_nonzero(~fg & truth))))
         if progress is not None:
             progress(i + 1, n)
-    return _report(name, seed, n, acc, scenario.gain)
+    return _report(name, seed, n, acc, scenario.gain, scenario.fps)
 
 
-def _has_steps(gain: Callable[[float], float], n: int) -> bool:
-    return any(abs(gain(i / 30.0) - gain((i - 1) / 30.0)) > 0.05 for i in range(1, n))
+def _steps(gain: Callable[[float], float], n: int, fps: float) -> list[int]:
+    """Frames at which the illumination gain jumps by more than 5 %."""
+    return [i for i in range(1, n) if abs(gain(i / fps) - gain((i - 1) / fps)) > 0.05]
 
 
 def survey_poses(scenario: object) -> list[GimbalState]:
@@ -187,9 +188,10 @@ def survey_poses(scenario: object) -> list[GimbalState]:
     return [GimbalState(p, t) for p in (-16.0, -8.0, 0.0, 8.0, 16.0) for t in (-4.0, 0.0, 4.0)]
 
 
-def _report(name: str, seed: int, n: int, acc: _Acc, gain: Callable[[float], float]) -> EvalReport:
+def _report(name: str, seed: int, n: int, acc: _Acc, gain: Callable[[float], float], fps: float = 30.0
+            ) -> EvalReport:
     extra: dict[str, float] = {}
-    steps = [i for i in range(1, n) if abs(gain(i / 30.0) - gain((i - 1) / 30.0)) > 0.05]
+    steps = _steps(gain, n, fps)
     if steps:
         at = [j for i in steps for j in (i, i + 1) if j < n]
         extra["pixel_f1_at_steps_min"] = float(min(acc.f1_frames[j] for j in at))

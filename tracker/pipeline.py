@@ -29,7 +29,8 @@ STAGES = ("candidates", "verify", "localize", "track")
 
 @dataclass(frozen=True)
 class Detection:
-    """One verified object: its blob, 3-D localisation and track id (-1 before it has one)."""
+    """One verified object: its blob, 3-D localisation and track id (a new track's id from its first
+    sighting; the track becomes primary only once confirmed)."""
 
     blob: Blob
     loc: Localization

@@ -42,7 +42,8 @@ class TrackerConfig:
 
 class MultiTracker:
     """`update(t, observations)` with observations (N, 3) of (x, y, disparity) -> assignment of each
-    observation to a track id (or -1 for an unconfirmed one), and the primary id."""
+    observation to a track id (a new, unconfirmed track for an unmatched one); `primary_id` is the oldest
+    confirmed track."""
 
     def __init__(self, config: TrackerConfig | None = None):
         self.cfg = config or TrackerConfig()

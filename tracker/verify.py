@@ -112,6 +112,20 @@ def _taken(blob: Blob) -> BoolA:
     return np.asarray(cv2.dilate(m8 | shadow, _TAKEN) > 0)
 
 
+def _background_disparity(cm: CorrespondenceMap, obj: BoolA, ys: NDArray[np.intp], xs: NDArray[np.intp],
+                          c: F64) -> float:
+    """The known background's disparity right behind the object's centre c (box pixels), or at the
+    object pixel nearest to it; 0 when the background behind the object is unknown (no gap test then)."""
+    iy, ix = int(c[1]), int(c[0])
+    if obj[iy, ix] and cm.valid[iy, ix]:
+        return float(cm.disparity[iy, ix])
+    ok = cm.valid[ys, xs]
+    if not ok.any():
+        return 0.0
+    k = int(np.argmin(np.hypot(xs[ok] - c[0], ys[ok] - c[1])))
+    return float(cm.disparity[ys[ok][k], xs[ok][k]])
+
+
 def _nearest_hint(hints: F64 | None, region: BoolA, box: Box) -> float | None:
     """The disparity of the predicted track nearest to the region's centre, if one lies inside it."""
     if hints is None or len(hints) == 0:
@@ -195,13 +209,11 @@ class Verifier:
                                               obj, either & free, cfg.epsilon)
         strips = self._strips(frame, box, obj, d0)
         fine = None if strips is None else strips.match(obj, d0, 4)
-        if fine is None:
-            return None
+        if fine is None or strips is None or (strips.clipped and fine.disparity > strips.d_hi - 2.0):
+            return None  # no match, or one the image edge may have cut short (the right camera may not see it)
         ys, xs = np.nonzero(obj)
         c_raw = np.array([xs.mean() + x0, ys.mean() + y0])  # eq. (10), c(i, j) = the object mask
-        # the background right behind the object's centre (or, for a ring-shaped object, its nearest pixel)
-        iy, ix = int(c_raw[1]) - y0, int(c_raw[0]) - x0
-        d_bg = float(cm.disparity[iy, ix] if obj[iy, ix] else cm.disparity[ys[0], xs[0]])
+        d_bg = _background_disparity(cm, obj, ys, xs, c_raw - (x0, y0))
         if fine.disparity < d_bg * (1.0 + cfg.min_depth_gap) + cfg.min_disparity_gap_px:
             return None  # not in front of the background: a misregistered background patch
         rc = self.rect.rect_of_raw[0][y0:y1, x0:x1][ys, xs].astype(np.float64)
@@ -252,13 +264,15 @@ class Verifier:
         # near the left edge the search range runs out of image: keep at least 8 columns of the region
         # (its right part) and search as far as the image allows
         rx0 = max(rx0, min(d_hi + 3, rx1 - 8))
+        clipped = rx0 - 3 < d_hi
         d_hi = min(d_hi, rx0 - 3)
-        if d_hi < 3 or rx1 + 2 > w or ry1 <= ry0:
+        rx1 = min(rx1, w - 2)  # at the right edge, match on the part inside the image
+        if d_hi < 3 or rx1 - rx0 < 4 or ry1 <= ry0:
             return None
         sx0 = rx0 - d_hi - 2
         box_r = (sx0, ry0, rx1 + 2, ry1)
         return _Strips(rect, (x0, y0), (rx0, ry0, rx1, ry1), rect.rectify(frame.left, 0, box_r),
-                       rect.rectify(frame.right, 1, box_r), rx0 - sx0, d_hi)
+                       rect.rectify(frame.right, 1, box_r), rx0 - sx0, d_hi, clipped)
 
     def _right_key_at(self, frame: StereoFrame, box: Box, d: float) -> BoolA:
         """The right-key mask of eq. (9), sampled at the left box's pixels shifted by disparity d."""
@@ -296,6 +310,7 @@ class _Strips:
     right: U8
     off: int
     d_hi: int
+    clipped: bool = False  # the image's left edge cut the search range short
 
     def match(self, region: BoolA, d0: float | None, radius: int) -> RegionMatch | None:
         """One disparity for the region (raw-left mask with its box's origin), mask-weighted, shrunk by

@@ -115,40 +115,15 @@ def run(args: argparse.Namespace) -> int:
     if args.frames is not None and args.frames < 1:
         raise UserError(f"--frames must be at least 1, got {args.frames}")
     source, rig, background = _open(args)
-    pipe = Pipeline(rig)
     loop = None
-    if args.servo:
-        source, loop = _servo_loop(args, source, pipe)
-    for bg in background:
-        pipe.learn_background(bg)
     live = sys.stdout.isatty() and not args.json
-    n, t_last, fps = 0, time.perf_counter(), 0.0
-    period = 1.0 / source.scenario.fps if args.source == "sim" and not args.fast else 0.0
-    t_start = time.perf_counter()
     try:
-        while args.frames is None or n < args.frames:
-            if period:
-                time.sleep(max(0.0, t_start + n * period - time.perf_counter()))
-            frame = source.read()
-            if frame is None:
-                break
-            step = loop.step(frame) if loop is not None else None
-            res = step.result if step is not None else pipe.step(frame)
-            now = time.perf_counter()
-            fps = 0.9 * fps + 0.1 / max(now - t_last, 1e-6) if n else 1.0 / max(now - t_last, 1e-6)
-            t_last = now
-            tm = telemetry(res, frame, fps)
-            if step is not None:
-                tm["servo"] = step.servo_json()
-                tm["latency_ms"] = round(step.latency_ms, 3)
-            if args.json:
-                print(json.dumps(tm), flush=True)
-            elif live:
-                sys.stdout.write("\r" + _line(tm))
-                sys.stdout.flush()
-            else:
-                print(_line(tm))
-            n += 1
+        pipe = Pipeline(rig)
+        if args.servo:
+            source, loop = _servo_loop(args, source, pipe)
+        for bg in background:
+            pipe.learn_background(bg)
+        _run_frames(args, source, pipe, loop, live)
     finally:
         source.close()
         if loop is not None and loop.driver is not None:
@@ -156,3 +131,33 @@ def run(args: argparse.Namespace) -> int:
         if live:
             print()
     return 0
+
+
+def _run_frames(args: argparse.Namespace, source: Any, pipe: Any, loop: Any, live: bool) -> None:
+    """Track frame by frame until the source ends or --frames, printing telemetry."""
+    n, t_last, fps = 0, time.perf_counter(), 0.0
+    period = 1.0 / source.scenario.fps if args.source == "sim" and not args.fast else 0.0
+    t_start = time.perf_counter()
+    while args.frames is None or n < args.frames:
+        if period:
+            time.sleep(max(0.0, t_start + n * period - time.perf_counter()))
+        frame = source.read()
+        if frame is None:
+            break
+        step = loop.step(frame) if loop is not None else None
+        res = step.result if step is not None else pipe.step(frame)
+        now = time.perf_counter()
+        fps = 0.9 * fps + 0.1 / max(now - t_last, 1e-6) if n else 1.0 / max(now - t_last, 1e-6)
+        t_last = now
+        tm = telemetry(res, frame, fps)
+        if step is not None:
+            tm["servo"] = step.servo_json()
+            tm["latency_ms"] = round(step.latency_ms, 3)
+        if args.json:
+            print(json.dumps(tm), flush=True)
+        elif live:
+            sys.stdout.write("\r" + _line(tm))
+            sys.stdout.flush()
+        else:
+            print(_line(tm))
+        n += 1
