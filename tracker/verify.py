@@ -103,12 +103,16 @@ def _temporal_outline(key: U8, bg: NDArray[np.float32], dev: NDArray[np.float32]
 _TAKEN = np.ones((5, 5), np.uint8)
 
 
-def _taken(blob: Blob) -> BoolA:
+def _taken(blob: Blob, changed: BoolA | None) -> BoolA:
     """The pixels of a box that a found object explains: the object and its occlusion shadow (the object
-    shifted left by d - d_background, approximately, in raw pixels), grown by two pixels."""
+    shifted left by d - d_background, approximately, in raw pixels), grown by two pixels. With the
+    temporal model (`changed`: pixels unlike the background), shadow pixels that changed are left: they
+    are another object seen there, not the shadow of this one."""
     m8 = blob.mask.astype(np.uint8)
     shift = np.array([[1.0, 0.0, -(blob.disparity - blob.bg_disparity)], [0.0, 1.0, 0.0]], np.float32)
     shadow = np.asarray(cv2.warpAffine(m8, shift, (m8.shape[1], m8.shape[0]), flags=cv2.INTER_NEAREST), np.uint8)
+    if changed is not None:
+        shadow[changed] = 0
     return np.asarray(cv2.dilate(m8 | shadow, _TAKEN) > 0)
 
 
@@ -177,11 +181,21 @@ class Verifier:
             found.append(blob)
             # a second object in the same box must be substantial: not the rim left around the first
             min_area = max(min_area, 4 * cfg.min_area_px, blob.area // 10)
-            if len(found) == max_objects or int(np.count_nonzero(m_raw & ~m_left)) < min_area:
-                break
-            taken = _taken(blob)
+            taken = _taken(blob, self._changed(frame, box, blob.gain))
             m_raw, free = m_raw & ~taken, free & ~taken
+            if len(found) == max_objects or int(np.count_nonzero(m_raw)) < min_area:
+                break
         return found
+
+    def _changed(self, frame: StereoFrame, box: Box, gain: float) -> BoolA | None:
+        """Pixels of the box unlike the temporal background (|Γ - g B| > ε + 3 g D); None while moving."""
+        model = self.sub.left_background(frame.gimbal)
+        if model is None:
+            return None
+        x0, y0, x1, y1 = box
+        bg, dev = model[0][y0:y1, x0:x1], model[1][y0:y1, x0:x1]
+        g = np.float32(gain)
+        return np.asarray(np.abs(frame.left[y0:y1, x0:x1] - g * bg) > self.cfg.epsilon + 3.0 * g * dev)
 
     def _verify_region(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap, m_left: BoolA,
                        d_hint: float | None, free: BoolA) -> Blob | None:
