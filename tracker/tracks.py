@@ -36,8 +36,9 @@ class Track:
 @dataclass(frozen=True)
 class TrackerConfig:
     gate_px: float = 40.0
+    gate_growth_px: float = 4.0  # per frame without a detection
     confirm_hits: int = 2
-    max_missed: int = 45
+    max_missed: int = 60
 
 
 class MultiTracker:
@@ -86,7 +87,9 @@ class MultiTracker:
         cost = np.linalg.norm(pred[:, None, :2] - obs[None, :, :2], axis=2)
         cost += 2.0 * np.abs(pred[:, None, 2] - obs[None, :, 2])  # disparity keeps depth order apart
         rows, cols = linear_sum_assignment(cost)
-        return [(int(r), int(c)) for r, c in zip(rows, cols, strict=True) if cost[r, c] <= self.cfg.gate_px]
+        # the gate widens while a track coasts: its predicted position grows less certain
+        gate = [self.cfg.gate_px + self.cfg.gate_growth_px * tr.missed for tr in self.tracks]
+        return [(int(r), int(c)) for r, c in zip(rows, cols, strict=True) if cost[r, c] <= gate[r]]
 
     def _choose_primary(self) -> None:
         alive = {tr.track_id: tr for tr in self.tracks if tr.confirmed}
