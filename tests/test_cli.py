@@ -7,6 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 
@@ -51,6 +52,7 @@ def test_track_prints_one_json_line_per_frame() -> None:
         (("track", "--rig", "/nonexistent/rig.json"), "rig file not found"),
         (("track", "--scenario", "nope"), "unknown scenario"),
         (("eval", "--scenario", "walk", "--epsilon", "0"), "epsilon"),
+        (("track", "--origin", "1,2"), "--origin must be three numbers"),
     ],
 )
 def test_bad_input_gives_one_line_and_exit_2(args: tuple[str, ...], message: str) -> None:
@@ -89,3 +91,11 @@ def test_rig_of_another_image_size_is_named(tmp_path: Path) -> None:
     out = tmeye("track", "--rig", str(rig), "--frames", "2", "--fast")
     assert out.returncode == 2 and "does not match the rig's (320, 240)" in out.stderr
     assert "Traceback" not in out.stderr
+
+
+def test_origin_moves_the_spherical_coordinates() -> None:
+    a = [json.loads(x) for x in tmeye("track", "--frames", "3", "--json", "--fast").stdout.splitlines()][-1]
+    b = [json.loads(x) for x in tmeye("track", "--frames", "3", "--json", "--fast", "--origin", "0,0,1").stdout
+         .splitlines()][-1]
+    assert b["z"] == a["z"]  # the same point
+    assert b["r"] == pytest.approx(float(np.linalg.norm([a["x"], a["y"], a["z"] - 1.0])), abs=1e-3)

@@ -21,6 +21,8 @@ def register(subparsers: Any) -> None:
     p.add_argument("--seed", type=int, default=0, help="simulated scene seed")
     p.add_argument("--rig", help="rig file (tmeye calibrate); required for real sources")
     p.add_argument("--frames", type=int, help="stop after this many frames")
+    p.add_argument("--origin", default="0,0,0",
+                   help="X,Y,Z (m, gimbal-base frame) about which r, θ and φ are given (default 0,0,0)")
     p.add_argument("--json", action="store_true", help="one JSON line per frame")
     p.add_argument("--fast", action="store_true",
                    help="simulated source: run as fast as possible instead of at the scenario's frame rate")
@@ -118,7 +120,7 @@ def run(args: argparse.Namespace) -> int:
     loop = None
     live = sys.stdout.isatty() and not args.json
     try:
-        pipe = Pipeline(rig)
+        pipe = Pipeline(rig, origin=_origin(args.origin))
         if args.servo:
             source, loop = _servo_loop(args, source, pipe)
         for bg in background:
@@ -131,6 +133,18 @@ def run(args: argparse.Namespace) -> int:
         if live:
             print()
     return 0
+
+
+def _origin(text: str) -> Any:
+    import numpy as np
+
+    try:
+        xyz = [float(v) for v in text.split(",")]
+    except ValueError:
+        xyz = []
+    if len(xyz) != 3 or not all(np.isfinite(xyz)):
+        raise UserError(f"--origin must be three numbers X,Y,Z in metres, got {text!r}")
+    return np.array(xyz)
 
 
 def _run_frames(args: argparse.Namespace, source: Any, pipe: Any, loop: Any, live: bool) -> None:
