@@ -85,11 +85,14 @@ def _f1(tp: int, fp: int, fn: int) -> float:
     return 2 * tp / max(2 * tp + fp + fn, 1)
 
 
-def _on(det: Detection, target: TargetTruth) -> bool:
-    """Whether a detection's centroid lies on a true object (within half its size, at least 4 px)."""
+def _on(det: Detection, target: TargetTruth, ids_left: NDArray[np.uint8]) -> bool:
+    """Whether a detection is a true object: most of its pixels are that object's (a target split by an
+    occluder counts for each part it is seen by)."""
     if target.centroid_left is None:
         return False
-    return bool(np.hypot(*(det.blob.centroid_raw - target.centroid_left)) < max(4.0, np.sqrt(target.area_left) / 2))
+    x0, y0, x1, y1 = det.blob.box
+    own = np.count_nonzero(ids_left[y0:y1, x0:x1][det.blob.mask] == target.target_id)
+    return bool(own > 0.5 * det.blob.area)
 
 
 def score_frame(acc: _Acc, res: FrameResult, truth: FrameTruth, pipe: Pipeline, min_area: int) -> None:
@@ -105,12 +108,12 @@ def score_frame(acc: _Acc, res: FrameResult, truth: FrameTruth, pipe: Pipeline, 
     # the rig sees the target when both cameras do (a target only the left camera sees has no disparity)
     visible = tt is not None and tt.centroid_left is not None and min(tt.area_left, tt.area_right) >= min_area
     prim = res.primary
-    if prim is not None and not any(_on(prim, o) for o in truth.targets):
+    if prim is not None and not any(_on(prim, o, truth.ids_left) for o in truth.targets):
         acc.false_target += 1  # the reported primary target is on no real object
     if not visible or tt is None or tt.centroid_left is None:
         return
     acc.visible += 1
-    det = next((d for d in res.detections if _on(d, tt)), None)  # target 1 seen, by whichever track
+    det = next((d for d in res.detections if _on(d, tt, truth.ids_left)), None)  # target 1, by any track
     if det is None:
         return
     if acc.last_id is not None and det.track_id != acc.last_id:
