@@ -73,7 +73,9 @@ def _largest(mask: BoolA, close: bool = False, every: bool = False) -> BoolA:
 
 
 _CORE = np.ones((3, 3), np.uint8)
-_MATCH_HALF = (24, 16)  # half width and height (px) of the largest window matched
+_MATCH_HALF = (24, 16)
+_MIN_SCORE = 0.8  # weighted ZNCC a region's match needs (a whole object scores 0.95-0.99; slivers beside an
+#                   occluder that catch its edge score lower and would give a wrong disparity)  # half width and height (px) of the largest window matched
 _RING = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (9, 9))
 _NEAR = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
 
@@ -340,7 +342,8 @@ class _Strips:
         if int(np.count_nonzero(core)) < 8:
             core = (wgt > 0.5).astype(np.uint8)
         if d0 is not None:  # a good prior: refine from it, search around it only if that fails
-            fit = refine_region(self.left, self.right, core, self.off, 0, d0)
+            fit = refine_region(self.left, self.right, core, self.off, 0, d0, min_score=_MIN_SCORE)
             if fit is not None:
                 return fit
-        return match_region(self.left, self.right, core, self.off, 0, self.d_hi, d0, search_radius=radius)
+        return match_region(self.left, self.right, core, self.off, 0, self.d_hi, d0, search_radius=radius,
+                            min_score=_MIN_SCORE)
