@@ -73,9 +73,10 @@ def _largest(mask: BoolA, close: bool = False, every: bool = False) -> BoolA:
 
 
 _CORE = np.ones((3, 3), np.uint8)
-_MATCH_HALF = (24, 16)
-_MIN_SCORE = 0.8  # weighted ZNCC a region's match needs (a whole object scores 0.95-0.99; slivers beside an
-#                   occluder that catch its edge score lower and would give a wrong disparity)  # half width and height (px) of the largest window matched
+_MATCH_HALF = (24, 16)  # half width and height (px) of the largest window matched
+# weighted ZNCC a region's match needs: a whole object scores 0.95-0.99; a sliver beside an occluder that
+# catches the occluder's edge scores lower and would give a wrong disparity
+_MIN_SCORE = 0.8
 _RING = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (9, 9))
 _NEAR = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
 
