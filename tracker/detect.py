@@ -182,7 +182,8 @@ class StereoSubtractor:
         s = self.cfg.stride
         x0, y0, x1, y1 = box
         sub = self.floor[y0 // s:(y1 + s - 1) // s, x0 // s:(x1 + s - 1) // s]
-        up = np.repeat(np.repeat(sub, s, axis=0), s, axis=1) if s > 1 else sub
+        up = (cv2.resize(sub, (sub.shape[1] * s, sub.shape[0] * s), interpolation=cv2.INTER_NEAREST)
+              if s > 1 else sub)
         oy, ox = y0 - (y0 // s) * s, x0 - (x0 // s) * s
         return np.asarray(up[oy:oy + y1 - y0, ox:ox + x1 - x0])
 
