@@ -92,8 +92,8 @@ class BackgroundDepth:
         g = frame.gimbal or GimbalState()
         X_w = X_rig @ gimbal_rotation(g.pan_deg, g.tilt_deg).T
         rho = np.linalg.norm(X_w, axis=1)
-        pu = np.round(self.f * X_w[:, 0] / X_w[:, 2] + self.cx).astype(int)
-        pv = np.round(self.f * X_w[:, 1] / X_w[:, 2] + self.cy).astype(int)
+        cu, cv = self._to_canvas(X_w)
+        pu, pv = np.round(cu).astype(int), np.round(cv).astype(int)
         ok = (X_w[:, 2] > 0) & (pu >= 0) & (pv >= 0) & (pu < self.canvas.shape[1]) & (pv < self.canvas.shape[0])
         order = np.argsort(-rho[ok])  # far first, so nearer surfaces win where both land
         self.canvas[pv[ok][order], pu[ok][order]] = (1.0 / rho[ok][order]).astype(np.float32)
@@ -110,7 +110,7 @@ class BackgroundDepth:
         ref = cv2.remap(img_o, cm.map_x, cm.map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
         resid = np.asarray(cv2.absdiff(img_k, ref), np.uint8)
         resid = np.asarray(cv2.subtract(resid, np.full_like(resid, 3)), np.uint8)
-        pu, pv = self._canvas_coords(key, frame.gimbal, 1, None)
+        pu, pv = self._to_canvas(self._directions(key, frame.gimbal, 1, None)[1])
         iu, iv = np.round(pu).astype(int).ravel(), np.round(pv).astype(int).ravel()
         vals = resid.ravel()
         ok = (iu >= 0) & (iv >= 0) & (iu < self.canvas.shape[1]) & (iv < self.canvas.shape[0])
@@ -142,15 +142,19 @@ class BackgroundDepth:
         self.canvas = np.where(inv >= 1e6, 0.0, inv).astype(np.float32)
 
     # -- lookup -----------------------------------------------------------------------------------
-    def _canvas_coords(self, key: int, gimbal: GimbalState | None, step: int,
-                       box: tuple[int, int, int, int] | None) -> tuple[F32, F32]:
-        """Canvas coordinates of the world direction of each key pixel on the grid, (h, w) each."""
+    def _directions(self, key: int, gimbal: GimbalState | None, step: int,
+                    box: tuple[int, int, int, int] | None) -> tuple[F32, F32, F32]:
+        """Rig-frame rays (h, w, 3) of the key pixels on the grid, their world directions (h, w, 3), and
+        R_world_rig (3, 3) for the gimbal angles."""
         rays = self._grid_rays(key, step, box)
         g = gimbal or GimbalState()
         R_wr = gimbal_rotation(g.pan_deg, g.tilt_deg).astype(np.float32)
-        w = rays @ R_wr.T  # world directions (h, w, 3)
-        return (self.f * w[..., 0] / w[..., 2] + np.float32(self.cx),
-                self.f * w[..., 1] / w[..., 2] + np.float32(self.cy))
+        return rays, rays @ R_wr.T, R_wr
+
+    def _to_canvas(self, w: NDArray[np.floating]) -> tuple[F32, F32]:
+        """Canvas coordinates (u, v) of world directions (..., 3): the virtual pinhole at home."""
+        return (np.asarray(self.f * w[..., 0] / w[..., 2] + self.cx, np.float32),
+                np.asarray(self.f * w[..., 1] / w[..., 2] + self.cy, np.float32))
 
     def _grid_rays(self, key: int, step: int, box: tuple[int, int, int, int] | None) -> F32:
         rays = self.rays[key]
@@ -166,12 +170,8 @@ class BackgroundDepth:
         pixels on a grid with the given step, optionally only inside box = (x0, y0, x1, y1)."""
         rig = self.rect.rig
         cam_k, cam_r = (rig.left, rig.right) if key == 0 else (rig.right, rig.left)
-        rays = self._grid_rays(key, step, box)
-        g = gimbal or GimbalState()
-        R_wr = gimbal_rotation(g.pan_deg, g.tilt_deg).astype(np.float32)
-        w = rays @ R_wr.T  # world directions (h, w, 3)
-        pu = self.f * w[..., 0] / w[..., 2] + np.float32(self.cx)
-        pv = self.f * w[..., 1] / w[..., 2] + np.float32(self.cy)
+        rays, w, R_wr = self._directions(key, gimbal, step, box)
+        pu, pv = self._to_canvas(w)
         inv = _remap_f32(self.canvas, pu, pv)
         floor = (np.asarray(cv2.remap(self.floors[key], pu, pv, cv2.INTER_NEAREST,
                                       borderMode=cv2.BORDER_CONSTANT, borderValue=0), np.uint8)
