@@ -97,10 +97,20 @@ def _temporal_outline(key: U8, bg: NDArray[np.float32], dev: NDArray[np.float32]
     ring = (cv2.dilate(grown.astype(np.uint8), _RING) == 0) & (bg > 8.0)
     kr, br = key[ring], bg[ring]
     g = float(kr.sum(dtype=np.float64) / br.sum(dtype=np.float64)) if kr.size >= 20 else 1.0  # Σ Γ / Σ B
-    diff = np.abs(key.astype(np.float32) - np.float32(g) * bg)
+    diff = _change(key, bg, g)
     inside = core & (diff > eps)
-    outside = band & (diff > eps + 3.0 * np.float32(g) * dev)
+    outside = band & (diff > _strict_limit(dev, g, eps))
     return _largest(inside | outside, close=True), g
+
+
+def _change(key: U8, bg: NDArray[np.float32], g: float) -> NDArray[np.float32]:
+    """|Γ - g B|: how far each pixel is from the temporal background at global gain g."""
+    return np.asarray(np.abs(key.astype(np.float32) - np.float32(g) * bg), np.float32)
+
+
+def _strict_limit(dev: NDArray[np.float32], g: float, eps: int) -> NDArray[np.float32]:
+    """ε + 3 g D: the change a pixel must exceed where the background itself moves by D on average."""
+    return np.asarray(np.float32(eps) + np.float32(3.0 * g) * dev, np.float32)
 
 
 _TAKEN = np.ones((5, 5), np.uint8)
@@ -197,8 +207,7 @@ class Verifier:
             return None
         x0, y0, x1, y1 = box
         bg, dev = model[0][y0:y1, x0:x1], model[1][y0:y1, x0:x1]
-        g = np.float32(gain)
-        return np.asarray(np.abs(frame.left[y0:y1, x0:x1] - g * bg) > self.cfg.epsilon + 3.0 * g * dev)
+        return np.asarray(_change(frame.left[y0:y1, x0:x1], bg, gain) > _strict_limit(dev, gain, self.cfg.epsilon))
 
     def _verify_region(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap, m_left: BoolA,
                        d_hint: float | None, free: BoolA) -> Blob | None:
