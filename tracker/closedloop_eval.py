@@ -209,7 +209,7 @@ def run_loop(name: str, seed: int, frames: int | None, predictive: bool,
                                             float(truth[2])), path.turning(t, t + hz)))
         if progress is not None:
             progress(i + 1, n)
-    rec.detection = _report(name, seed, n, acc, scenario.gain)
+    rec.detection = _report(name, seed, n, acc, scenario.gain, scenario.fps)
     return rec
 
 

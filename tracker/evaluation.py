@@ -16,7 +16,7 @@ from tracker.geometry import StereoRig
 from tracker.localize import spherical
 from tracker.pipeline import Detection, FrameResult, Pipeline
 from tracker.sim.render import FrameTruth, TargetTruth
-from tracker.sim.scenarios import SimRig, get_scenario
+from tracker.sim.scenarios import Scenario, SimRig, get_scenario
 
 F64 = NDArray[np.float64]
 Progress = Callable[[int, int], None]
@@ -178,12 +178,9 @@ def _steps(gain: Callable[[float], float], n: int, fps: float) -> list[int]:
     return [i for i in range(1, n) if abs(gain(i / fps) - gain((i - 1) / fps)) > 0.05]
 
 
-def survey_poses(scenario: object) -> list[GimbalState]:
+def survey_poses(scenario: Scenario) -> list[GimbalState]:
     """Gimbal poses at which the background is learnt before a run: home, plus a sweep when the
     scenario moves the cameras."""
-    from tracker.sim.scenarios import Scenario
-
-    assert isinstance(scenario, Scenario)
     poses = {(round(scenario.gimbal(t).pan_deg, 3), round(scenario.gimbal(t).tilt_deg, 3))
              for t in np.arange(0.0, scenario.frames / scenario.fps, 0.5)}
     if len(poses) == 1:
@@ -191,7 +188,7 @@ def survey_poses(scenario: object) -> list[GimbalState]:
     return [GimbalState(p, t) for p in (-16.0, -8.0, 0.0, 8.0, 16.0) for t in (-4.0, 0.0, 4.0)]
 
 
-def _report(name: str, seed: int, n: int, acc: _Acc, gain: Callable[[float], float], fps: float = 30.0
+def _report(name: str, seed: int, n: int, acc: _Acc, gain: Callable[[float], float], fps: float
             ) -> EvalReport:
     extra: dict[str, float] = {}
     steps = _steps(gain, n, fps)
