@@ -136,15 +136,12 @@ class StereoSubtractor:
                                  full.floor[sl])
 
     def prime(self, frame: StereoFrame) -> None:
-        """Start the temporal model from an empty-scene pair at its pose: the background image B, and the
-        residual floor from the survey (BackgroundDepth's floor canvas) where the cameras are now."""
+        """Start the temporal model from an empty-scene pair at its pose: the background image B. The
+        next frame counts as the first (not "moving"); `step` seeds the residual floor from the survey
+        and maps the correspondences at whatever pose that frame has (not at every survey pose)."""
         pose = self._pose(frame.gimbal)
         self.left_bg[pose] = (frame.left.astype(np.float32), np.zeros(frame.left.shape, np.float32))
-        pm = self.maps(frame.gimbal)
-        self.floor = pm.low.floor.copy()
-        self._frame_pose = None  # the next frame is the first: not "moving"
-        for key in (0, 1):  # the full-resolution maps now, not on the first frame
-            pm.full[key] = self.bg.correspondence(key, frame.gimbal)
+        self._frame_pose = None
 
     @staticmethod
     def _pose(gimbal: GimbalState | None) -> tuple[float, float]:
