@@ -1,4 +1,4 @@
-"""Motion models and the unscented filter they run in (for tracker.predict).
+"""Motion models of tracker.predict: transitions f(s, dt), process noise Q and the measurement h(s).
 
 State (world frame, metres, seconds): s = [x, y, z, vx, vy, vz] (+ ω, the horizontal turn rate in rad/s).
 Measurement h(s) = [r, θ, φ]: range, azimuth atan2(x, z) and elevation atan2(-y, hypot(x, z)).
@@ -12,8 +12,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
-from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter
 from numpy.typing import NDArray
 
 F64 = NDArray[np.float64]
@@ -98,45 +96,6 @@ def hx_spherical_batch(S: F64) -> F64:
     return np.stack([np.sqrt(rho * rho + y * y), np.arctan2(x, z), np.arctan2(-y, rho)], axis=1)
 
 
-class _FastUKF(UnscentedKalmanFilter):  # type: ignore[misc]
-    """filterpy's UKF with the per-sigma-point Python loops replaced by array operations (the same
-    equations: χ' = f(χ), Z = h(χ'), P_xz = Σ W_c (χ' - x)(Z - z)ᵀ)."""
-
-    x: F64
-    P: F64
-
-    def __init__(self, dim_x: int, fx_batch: Callable[[F64, float], F64], *args: object, **kw: object):
-        super().__init__(dim_x, *args, **kw)
-        self.fx_batch = fx_batch
-
-    def compute_process_sigmas(self, dt: float, fx: object = None, **fx_args: object) -> None:
-        self.sigmas_f = self.fx_batch(self.points_fn.sigma_points(self.x, self.P), dt)
-
-    def cross_variance(self, x: F64, z: F64, sigmas_f: F64, sigmas_h: F64) -> F64:
-        dx = sigmas_f - x
-        dz = sigmas_h - z
-        dz[:, 1] = (dz[:, 1] + math.pi) % (2.0 * math.pi) - math.pi  # θ wrapped
-        return np.asarray((self.Wc[:, None] * dx).T @ dz)
-
-    def update(self, z: F64, R: F64 | None = None, UT: object = None, hx: object = None, **hx_args: object
-               ) -> None:
-        R = self.R if R is None else R
-        self.sigmas_h = hx_spherical_batch(self.sigmas_f)
-        zp = self.z_mean(self.sigmas_h, self.Wm)  # ẑ = Σ W_m Z (θ by its circular mean)
-        dz = self.sigmas_h - zp
-        dz[:, 1] = (dz[:, 1] + math.pi) % (2.0 * math.pi) - math.pi
-        self.S = (self.Wc[:, None] * dz).T @ dz + R  # S = Σ W_c (Z - ẑ)(Z - ẑ)ᵀ + R
-        self.SI = self.inv(self.S)
-        Pxz = self.cross_variance(self.x, zp, self.sigmas_f, self.sigmas_h)
-        self.K = Pxz @ self.SI  # Kalman gain
-        self.y = self.residual_z(z, zp)  # residual
-        self.x = self.x + self.K @ self.y
-        self.P = self.P - self.K @ self.S @ self.K.T
-        self.z = np.array(z, copy=True)
-        self.x_post, self.P_post = self.x.copy(), self.P.copy()
-        self._log_likelihood = self._likelihood = self._mahalanobis = None
-
-
 def q_white_accel(dt: float, psd: float) -> F64:
     """Process noise (6, 6) of continuous white acceleration with spectral density psd (m²/s³) per axis:
     per axis [[dt³/3, dt²/2], [dt²/2, dt]] psd, ordered [x, y, z, vx, vy, vz]."""
@@ -151,20 +110,6 @@ def q_white_accel(dt: float, psd: float) -> F64:
 def hx_spherical(s: F64) -> F64:
     """Measurement function h(s) = [r, θ, φ] of the position s[0:3]."""
     return cartesian_to_spherical(s[0:3])
-
-
-def _residual_z(a: F64, b: F64) -> F64:
-    """z residual with θ wrapped to [-π, π) (φ stays within ±π/2)."""
-    y = a - b
-    y[1] = wrap_angle(float(y[1]))
-    return y
-
-
-def _z_mean(sigmas: F64, Wm: F64) -> F64:
-    """Weighted mean of measurement sigma points; θ by its circular mean so ±π does not average to 0."""
-    z: F64 = np.asarray(np.dot(Wm, sigmas), dtype=float)
-    z[1] = math.atan2(float(np.dot(Wm, np.sin(sigmas[:, 1]))), float(np.dot(Wm, np.cos(sigmas[:, 1]))))
-    return z
 
 
 @dataclass(frozen=True)
@@ -191,21 +136,6 @@ class MotionModel:
             Q[6, 6] = self.turn_psd * dt  # random-walk turn rate: var grows as psd·dt
         return Q
 
-
-
-class _FastMerwe(MerweScaledSigmaPoints):  # type: ignore[misc]
-    """Van der Merwe's sigma points, built with array operations: χ_0 = x, χ_±k = x ± U_k,
-    U = chol((λ + n) P) (upper triangular, rows k)."""
-
-    def sigma_points(self, x: F64, P: F64) -> F64:
-        lam = self.alpha**2 * (self.n + self.kappa) - self.n  # λ = α²(n + κ) - n
-        U = scipy.linalg.cholesky((lam + self.n) * P)  # upper: UᵀU = (λ + n) P
-        return np.vstack([x, x + U, x - U])
-
-
-def _sigma_points(n: int) -> MerweScaledSigmaPoints:
-    # α = 1, κ = 0 -> λ = 0: no negative weights, points at ±√n σ.
-    return _FastMerwe(n, alpha=1.0, beta=2.0, kappa=0.0)
 
 
 _BATCH: dict[FX, Callable[[F64, float], F64]] = {fx_cv: fx_cv_batch, fx_ct: fx_ct_batch}

@@ -4,9 +4,10 @@ State (world frame, metres, seconds): s = [x, y, z, vx, vy, vz] for constant vel
 horizontal turn rate ω (rad/s, about the vertical y axis) for the coordinated-turn model (CT): 7 states.
 Measurement: spherical about the origin, z = [r, θ, φ] with r = |p|, θ = atan2(x, z) (azimuth),
 φ = atan2(-y, hypot(x, z)) (elevation, positive up), angles in radians, each with its own 1-σ.
-h(s) is non-linear, so each model runs a filterpy UnscentedKalmanFilter; the IMM mixing, mode
-probabilities and combination (Bar-Shalom, Li & Kirubarajan §11.6) are written out here because
-filterpy's IMMEstimator only mixes linear KalmanFilters. Time steps may be irregular: the process noise
+h(s) is non-linear, so each model is an unscented Kalman filter (filterpy's equations and sigma-point
+weights, run on the stacked models at once by tracker.ukf); the IMM mixing, mode probabilities and
+combination (Bar-Shalom, Li & Kirubarajan §11.6) are written out because filterpy's IMMEstimator only
+mixes linear KalmanFilters. Time steps may be irregular: the process noise
 and the Markov switching probabilities are functions of dt.
 """
 
@@ -19,23 +20,18 @@ from enum import StrEnum
 from typing import Protocol
 
 import numpy as np
-from filterpy.kalman import unscented_transform
 
 from tracker.motion import (
     F64,
     FX,
     MotionModel,
-    _FastUKF,
-    _residual_z,
-    _sigma_points,
-    _z_mean,
     cartesian_to_spherical,
     fx_ct,
     fx_cv,
-    hx_spherical,
     spherical_to_cartesian,
     wrap_angle,
 )
+from tracker.ukf import SigmaWeights, combine, mix, propagate, sigma_points, unscented_transform, update_spherical
 
 __all__ = [
     "CVPredictor", "F64", "FX", "IMMPredictor", "Measurement", "MotionModel", "PredictedState", "Predictor",
@@ -168,21 +164,23 @@ class PredictorConfig:
 
 class UKFBankPredictor:
     """Interacting multiple model (IMM) predictor over UKFs, one per `MotionModel`; with one model it is
-    a plain UKF. Implements `Predictor`. Use `IMMPredictor()` or `CVPredictor()` to construct."""
+    a plain UKF. Implements `Predictor`. Use `IMMPredictor()` or `CVPredictor()` to construct.
+    The models' states are stacked, X (M, n) and P (M, n, n), and filtered together (tracker.ukf)."""
 
     def __init__(self, models: Sequence[MotionModel], dim: int, config: PredictorConfig | None = None):
         self.models = tuple(models)
         self.dim = dim
         self.config = config or PredictorConfig()
-        pts = _sigma_points(dim)
-        self._ukfs = [
-            _FastUKF(dim, m.fx_batch, 3, 0.0, hx_spherical, m.fx, pts, z_mean_fn=_z_mean, residual_z=_residual_z)
-            for m in self.models
-        ]
-        self._mu = np.full(len(self.models), 1.0 / len(self.models))
+        self._w = SigmaWeights.merwe(dim)
+        self._fx = [m.fx_batch for m in self.models]
+        M = len(self.models)
+        self._X = np.zeros((M, dim))
+        self._P = np.tile(np.eye(dim), (M, 1, 1))
+        self._mu = np.full(M, 1.0 / M)
         self._t: float | None = None  # time of the filter state
         self._t_meas = 0.0  # time of the last measurement used
         self._last: TrackEstimate | None = None
+        self._per_dt: dict[float, tuple[F64, F64]] = {}  # dt -> (Π, stacked Q): frame intervals repeat
 
     # --- public API --------------------------------------------------------------------------------
 
@@ -223,15 +221,8 @@ class UKFBankPredictor:
         dt = t - self._t
         if dt < 0.0:
             raise ValueError(f"cannot predict at {t:.6f} s, before the track's time {self._t:.6f} s")
-        xs0, Ps0, cbar = self._mix(dt)
-        xs, Ps = [], []
-        for m, ukf, x0, P0 in zip(self.models, self._ukfs, xs0, Ps0, strict=True):
-            sig = ukf.points_fn.sigma_points(x0, P0)
-            sig_f = m.fx_batch(sig, dt)
-            x, P = unscented_transform(sig_f, ukf.Wm, ukf.Wc, m.Q(dt, self.dim))
-            xs.append(x)
-            Ps.append(P)
-        x, P = _combine(xs, Ps, cbar)
+        xs, Ps, cbar = self._predict(dt)
+        x, P = combine(xs, Ps, cbar)
         return PredictedState(t, x[0:3].copy(), x[3:6].copy(), P[0:3, 0:3].copy())
 
     def nees(self, truth_position: F64) -> float:
@@ -252,10 +243,20 @@ class UKFBankPredictor:
         P[3:6, 3:6] = np.eye(3) * self.config.init_speed_sigma**2
         if self.dim == 7:
             P[6, 6] = self.config.init_turn_sigma**2
-        for ukf in self._ukfs:
-            ukf.x, ukf.P = x.copy(), P.copy()
-        self._mu = np.full(len(self.models), 1.0 / len(self.models))
+        M = len(self.models)
+        self._X, self._P = np.tile(x, (M, 1)), np.tile(P, (M, 1, 1))
+        self._mu = np.full(M, 1.0 / M)
         self._t = self._t_meas = t
+
+    def _constants(self, dt: float) -> tuple[F64, F64]:
+        """The Markov matrix Π (M, M) and the models' process noise Q (M, n, n) for a step of dt."""
+        got = self._per_dt.get(dt)
+        if got is None:
+            if len(self._per_dt) > 64:
+                self._per_dt.clear()
+            Q = np.stack([m.Q(dt, self.dim) for m in self.models])
+            got = self._per_dt[dt] = (self._transition(dt), Q)
+        return got
 
     def _transition(self, dt: float) -> F64:
         """Markov matrix Π[i, j] = P(mode j after dt | mode i): stay with exp(-dt/τ_i), else switch evenly."""
@@ -269,67 +270,39 @@ class UKFBankPredictor:
             Pi[i, i] = stay
         return Pi
 
-    def _mix(self, dt: float) -> tuple[list[F64], list[F64], F64]:
-        """IMM interaction: mixed initial states/covariances per model and predicted mode probabilities."""
-        Pi = self._transition(dt)
-        cbar = self._mu @ Pi  # c̄_j = Σ_i Π_ij μ_i
-        w = Pi * self._mu[:, None] / cbar[None, :]  # μ_i|j = Π_ij μ_i / c̄_j
-        xs = [u.x for u in self._ukfs]
-        Ps = [u.P for u in self._ukfs]
-        xs0, Ps0 = [], []
-        for j in range(len(self.models)):
-            x0 = sum(w[i, j] * xs[i] for i in range(len(xs)))  # x0_j = Σ_i μ_i|j x_i
-            P0 = sum(
-                w[i, j] * (Ps[i] + np.outer(xs[i] - x0, xs[i] - x0)) for i in range(len(xs))
-            )  # P0_j = Σ_i μ_i|j [P_i + (x_i - x0_j)(x_i - x0_j)ᵀ]
-            xs0.append(np.asarray(x0))
-            Ps0.append(np.asarray(P0))
-        return xs0, Ps0, cbar
+    def _predict(self, dt: float) -> tuple[F64, F64, F64]:
+        """Mix, then predict every model by dt: means (M, n), covariances (M, n, n) and the predicted mode
+        probabilities c̄ (M,)."""
+        Pi, Q = self._constants(dt)
+        X0, P0, cbar = mix(self._X, self._P, self._mu, Pi)
+        x, P = unscented_transform(propagate(sigma_points(X0, P0, self._w), self._fx, dt), self._w, Q)
+        return x, P, cbar
 
     def _step(self, dt: float, z: Measurement | None) -> float | None:
         """Mix, predict each model by dt, update with z (if any), update μ. Returns the NIS of the most
         probable model (None without z)."""
-        xs0, Ps0, cbar = self._mix(dt)
-        logL = np.zeros(len(self.models))
-        nis = np.zeros(len(self.models))
-        for j, (m, ukf) in enumerate(zip(self.models, self._ukfs, strict=True)):
-            ukf.x, ukf.P = xs0[j], _sym(Ps0[j])
-            ukf.Q = m.Q(dt, self.dim)
-            ukf.predict(dt=dt)
-            if z is not None:
-                ukf.update(z.z, R=z.R)
-                ukf.P = _sym(ukf.P)
-                nis[j] = float(ukf.y @ ukf.SI @ ukf.y)  # ε_ν = νᵀ S⁻¹ ν
-                logL[j] = -0.5 * (nis[j] + float(np.linalg.slogdet(2.0 * math.pi * ukf.S)[1]))
+        x, P, cbar = self._predict(dt)
         if z is None:
+            self._X, self._P = x, P
             self._mu = cbar  # no likelihood: μ_j = c̄_j
             return None
-        lw = logL + np.log(np.maximum(cbar, 1e-300))  # μ_j ∝ L_j c̄_j, in logs to avoid underflow
+        sig = sigma_points(x, P, self._w)  # redrawn from the prior, as filterpy does: they carry Q too
+        up = update_spherical(sig, x, P, z.z, z.R, self._w)
+        self._X, self._P = up.X, up.P
+        lw = up.log_likelihood + np.log(np.maximum(cbar, 1e-300))  # μ_j ∝ L_j c̄_j, in logs (underflow)
         mu = np.exp(lw - lw.max())
         self._mu = np.maximum(mu / mu.sum(), 1e-12)
         self._mu /= self._mu.sum()
-        return float(nis[int(np.argmax(self._mu))])
+        return float(up.nis[int(np.argmax(self._mu))])
 
     def _estimate(self, t: float, nis: float | None) -> TrackEstimate:
         mu = tuple(float(m) for m in self._mu)
         if self._t is None:
             return TrackEstimate(t, TrackStatus.LOST, None, 0.0, None, mu)
-        x, P = _combine([u.x for u in self._ukfs], [u.P for u in self._ukfs], self._mu)
+        x, P = combine(self._X, self._P, self._mu)
         state = PredictedState(t, x[0:3].copy(), x[3:6].copy(), P[0:3, 0:3].copy())
         status = TrackStatus.TRACKING if self.coasting_s == 0.0 else TrackStatus.COASTING
         return TrackEstimate(t, status, state, self.coasting_s, nis, mu)
-
-
-def _sym(P: F64) -> F64:
-    """Symmetrise a covariance (round-off in the UKF update makes it drift)."""
-    return np.asarray(0.5 * (P + P.T))
-
-
-def _combine(xs: Sequence[F64], Ps: Sequence[F64], mu: F64) -> tuple[F64, F64]:
-    """IMM output: x = Σ_j μ_j x_j, P = Σ_j μ_j [P_j + (x_j - x)(x_j - x)ᵀ]."""
-    x = np.asarray(sum(m * xj for m, xj in zip(mu, xs, strict=True)))
-    P = sum(m * (Pj + np.outer(xj - x, xj - x)) for m, xj, Pj in zip(mu, xs, Ps, strict=True))
-    return x, np.asarray(P)
 
 
 # Tuned on the seeded scenarios of tests/test_predict.py (targets 6-15 m away at 3-8 m/s, 30 Hz).
