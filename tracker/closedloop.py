@@ -18,6 +18,7 @@ wider pan/tilt range than its default.
 from __future__ import annotations
 
 import math
+import statistics
 import time
 from collections import deque
 from collections.abc import Callable
@@ -130,7 +131,7 @@ class ServoLoop:
         """The capture-to-command latency model (s): configured, or the median of recent measurements."""
         if self.config.latency_s is not None:
             return self.config.latency_s
-        return float(np.median(self._latencies)) if self._latencies else DEFAULT_LATENCY_S
+        return statistics.median(self._latencies) if self._latencies else DEFAULT_LATENCY_S
 
     def prepare(self, frame: StereoFrame) -> StereoFrame:
         """A frame from a source that does not know the mount's angles gets the last commanded ones."""

@@ -96,17 +96,6 @@ def hx_spherical_batch(S: F64) -> F64:
     return np.stack([np.sqrt(rho * rho + y * y), np.arctan2(x, z), np.arctan2(-y, rho)], axis=1)
 
 
-def q_white_accel(dt: float, psd: float) -> F64:
-    """Process noise (6, 6) of continuous white acceleration with spectral density psd (m²/s³) per axis:
-    per axis [[dt³/3, dt²/2], [dt²/2, dt]] psd, ordered [x, y, z, vx, vy, vz]."""
-    Q = np.zeros((6, 6))
-    i = np.arange(3)
-    Q[i, i] = psd * dt**3 / 3.0  # position variance
-    Q[i, i + 3] = Q[i + 3, i] = psd * dt**2 / 2.0  # position-velocity covariance
-    Q[i + 3, i + 3] = psd * dt  # velocity variance
-    return Q
-
-
 def hx_spherical(s: F64) -> F64:
     """Measurement function h(s) = [r, θ, φ] of the position s[0:3]."""
     return cartesian_to_spherical(s[0:3])
@@ -128,14 +117,23 @@ class MotionModel:
         """fx over many states at once, (N, n) -> (N, n)."""
         return _BATCH.get(self.fx, lambda S, dt: np.array([self.fx(s, dt) for s in S]))
 
+    def Q_terms(self, dim: int) -> F64:
+        """(3, dim, dim) C₁, C₂, C₃ with Q(dt) = C₁ dt + C₂ dt² + C₃ dt³: continuous white acceleration of
+        spectral density psd per axis gives [[dt³/3, dt²/2], [dt²/2, dt]] psd for each (position, velocity)
+        pair, ordered [x, y, z, vx, vy, vz]; a random-walk turn rate ω (7 states) gives psd_ω dt."""
+        C = np.zeros((3, dim, dim))
+        i = np.arange(3)
+        C[2, i, i] = self.accel_psd / 3.0  # position variance, × dt³
+        C[1, i, i + 3] = C[1, i + 3, i] = self.accel_psd / 2.0  # position-velocity covariance, × dt²
+        C[0, i + 3, i + 3] = self.accel_psd  # velocity variance, × dt
+        if dim == 7:
+            C[0, 6, 6] = self.turn_psd  # turn-rate variance grows as psd·dt
+        return C
+
     def Q(self, dt: float, dim: int) -> F64:
         """Process noise (dim, dim) for a step of dt seconds."""
-        Q = np.zeros((dim, dim))
-        Q[:6, :6] = q_white_accel(dt, self.accel_psd)
-        if dim == 7:
-            Q[6, 6] = self.turn_psd * dt  # random-walk turn rate: var grows as psd·dt
-        return Q
-
+        C = self.Q_terms(dim)
+        return np.asarray(C[0] * dt + C[1] * dt**2 + C[2] * dt**3)
 
 
 _BATCH: dict[FX, Callable[[F64, float], F64]] = {fx_cv: fx_cv_batch, fx_ct: fx_ct_batch}

@@ -180,7 +180,8 @@ class UKFBankPredictor:
         self._t: float | None = None  # time of the filter state
         self._t_meas = 0.0  # time of the last measurement used
         self._last: TrackEstimate | None = None
-        self._per_dt: dict[float, tuple[F64, F64]] = {}  # dt -> (Π, stacked Q): frame intervals repeat
+        self._Q_terms = np.stack([m.Q_terms(dim) for m in self.models], axis=1)  # (3, M, n, n)
+        self._sojourn_s = np.array([m.mean_sojourn_s for m in self.models])
 
     # --- public API --------------------------------------------------------------------------------
 
@@ -249,26 +250,17 @@ class UKFBankPredictor:
         self._t = self._t_meas = t
 
     def _constants(self, dt: float) -> tuple[F64, F64]:
-        """The Markov matrix Π (M, M) and the models' process noise Q (M, n, n) for a step of dt."""
-        got = self._per_dt.get(dt)
-        if got is None:
-            if len(self._per_dt) > 64:
-                self._per_dt.clear()
-            Q = np.stack([m.Q(dt, self.dim) for m in self.models])
-            got = self._per_dt[dt] = (self._transition(dt), Q)
-        return got
-
-    def _transition(self, dt: float) -> F64:
-        """Markov matrix Π[i, j] = P(mode j after dt | mode i): stay with exp(-dt/τ_i), else switch evenly."""
+        """The Markov matrix Π (M, M), Π[i, j] = P(mode j after dt | mode i): stay with exp(-dt/τ_i), else
+        switch evenly; and the models' process noise Q (M, n, n) = C₁ dt + C₂ dt² + C₃ dt³."""
+        C = self._Q_terms
+        Q = C[0] * dt + C[1] * (dt * dt) + C[2] * (dt * dt * dt)
         M = len(self.models)
         if M == 1:
-            return np.ones((1, 1))
-        Pi = np.empty((M, M))
-        for i, m in enumerate(self.models):
-            stay = math.exp(-dt / m.mean_sojourn_s)
-            Pi[i, :] = (1.0 - stay) / (M - 1)
-            Pi[i, i] = stay
-        return Pi
+            return np.ones((1, 1)), Q
+        stay = np.exp(-dt / self._sojourn_s)
+        Pi = np.repeat(((1.0 - stay) / (M - 1))[:, None], M, axis=1)
+        Pi[np.diag_indices(M)] = stay
+        return Pi, Q
 
     def _predict(self, dt: float) -> tuple[F64, F64, F64]:
         """Mix, then predict every model by dt: means (M, n), covariances (M, n, n) and the predicted mode

@@ -39,7 +39,9 @@ class Rectifier:
 
     R1, R2: (3, 3) rotations from each camera frame into its rectified frame; f, cx, cy: the rectified
     pinhole (pixels); b: baseline (m). maps[k] = (map_x, map_y) float32 (H, W): raw position sampled for
-    each rectified pixel. rect_of_raw[k]: (H, W, 2) rectified position of each raw pixel.
+    each rectified pixel. rect_of_raw[k]: (H, W, 2) rectified position of each raw pixel. area_of_raw:
+    (H, W) rectified area of each raw left pixel; area_moments: (H, W, 3) float64 [a x_rect, a y_rect, a]
+    of each raw left pixel, whose masked sums give an area-weighted rectified centroid (eq. 10).
     """
 
     rig: StereoRig
@@ -52,6 +54,7 @@ class Rectifier:
     maps: tuple[tuple[F32, F32], tuple[F32, F32]] = field(init=False)
     rect_of_raw: tuple[F32, F32] = field(init=False)
     area_of_raw: F32 = field(init=False)
+    area_moments: NDArray[np.float64] = field(init=False)
 
     def __post_init__(self) -> None:
         L, R = self.rig.left, self.rig.right
@@ -74,6 +77,8 @@ class Rectifier:
         self.maps = (f32[0], f32[1])
         self.rect_of_raw = (rect[0], rect[1])
         self.area_of_raw = _pixel_areas(rect[0])
+        a = self.area_of_raw.astype(np.float64)
+        self.area_moments = np.dstack([a * rect[0][..., 0], a * rect[0][..., 1], a])
 
     def rectify(self, img: U8, side: int, box: tuple[int, int, int, int] | None = None) -> U8:
         """Rectified image of camera `side` (0 left, 1 right), or only the rectified window

@@ -82,7 +82,7 @@ _NEAR = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
 
 
 def _temporal_outline(key: U8, bg: NDArray[np.float32], dev: NDArray[np.float32], core: BoolA,
-                      region: BoolA, eps: int) -> tuple[BoolA, float]:
+                      region: BoolA, eps: int) -> tuple[BoolA, float, BoolA]:
     """The object's exact outline from the temporal model, inside a stereo region.
 
     core: pixels both keys agree are the object (left-key ∩ warped right-key mask: no occlusion shadow,
@@ -91,16 +91,18 @@ def _temporal_outline(key: U8, bg: NDArray[np.float32], dev: NDArray[np.float32]
     ring outside the region; a pixel is the object if |Γ - g B| > ε in `core`, or > ε + 3 D elsewhere in
     `region` or a two-pixel rim, where D is the background's own mean deviation: a shadow falls on
     unchanged background (|Γ - g B| small) unless the background moves (foliage, large D).
-    Returns the mask and g (1.0 when the ring is too small)."""
+    Returns the mask, g (1.0 when the ring is too small) and the box's pixels that changed at the strict
+    threshold."""
     grown = cv2.dilate((region | core).astype(np.uint8), _NEAR) > 0
     band = grown & ~core
-    ring = (cv2.dilate(grown.astype(np.uint8), _RING) == 0) & (bg > 8.0)
-    kr, br = key[ring], bg[ring]
-    g = float(kr.sum(dtype=np.float64) / br.sum(dtype=np.float64)) if kr.size >= 20 else 1.0  # Σ Γ / Σ B
+    ring = ((cv2.dilate(grown.view(np.uint8), _RING) == 0) & (bg > 8.0)).view(np.uint8)
+    g = 1.0
+    if cv2.countNonZero(ring) >= 20:
+        g = cv2.mean(key, mask=ring)[0] / cv2.mean(bg, mask=ring)[0]  # Σ Γ / Σ B over the ring
     diff = _change(key, bg, g)
+    changed = diff > _strict_limit(dev, g, eps)
     inside = core & (diff > eps)
-    outside = band & (diff > _strict_limit(dev, g, eps))
-    return _largest(inside | outside, close=True), g
+    return _largest(inside | (band & changed), close=True), g, changed
 
 
 def _change(key: U8, bg: NDArray[np.float32], g: float) -> NDArray[np.float32]:
@@ -129,18 +131,26 @@ def _taken(blob: Blob, changed: BoolA | None) -> BoolA:
     return np.asarray(cv2.dilate(m8 | shadow, _TAKEN) > 0)
 
 
-def _background_disparity(cm: CorrespondenceMap, obj: BoolA, ys: NDArray[np.intp], xs: NDArray[np.intp],
-                          c: F64) -> float:
+def _mask_centroid(m8: U8) -> tuple[int, F64]:
+    """Pixel count Σ c(i, j) and centroid (Σ i c / Σ c, Σ j c / Σ c) (2,) of a 0/1 mask (eq. 10), from its
+    column and row sums."""
+    cols = cv2.reduce(m8, 0, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel()  # Σ_j c(i, j) per column i
+    rows = cv2.reduce(m8, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel()
+    n = int(cols.sum())
+    return n, np.array([float(cols @ np.arange(cols.size)) / n, float(rows @ np.arange(rows.size)) / n])
+
+
+def _background_disparity(cm: CorrespondenceMap, obj: BoolA, c: F64) -> float:
     """The known background's disparity right behind the object's centre c (box pixels), or at the
     object pixel nearest to it; 0 when the background behind the object is unknown (no gap test then)."""
     iy, ix = int(c[1]), int(c[0])
     if obj[iy, ix] and cm.valid[iy, ix]:
         return float(cm.disparity[iy, ix])
-    ok = cm.valid[ys, xs]
-    if not ok.any():
+    ys, xs = np.nonzero(obj & cm.valid)
+    if xs.size == 0:
         return 0.0
-    k = int(np.argmin(np.hypot(xs[ok] - c[0], ys[ok] - c[1])))
-    return float(cm.disparity[ys[ok][k], xs[ok][k]])
+    k = int(np.argmin(np.hypot(xs - c[0], ys - c[1])))
+    return float(cm.disparity[ys[k], xs[k]])
 
 
 def _nearest_hint(hints: F64 | None, region: BoolA, box: Box) -> float | None:
@@ -187,41 +197,35 @@ class Verifier:
             m_left = _largest(m_raw, close=True)
             if int(np.count_nonzero(m_left)) < min_area:
                 break
-            blob = self._verify_region(frame, box, cm, m_left, _nearest_hint(hints, m_left, box), free)
-            if blob is None:
+            got = self._verify_region(frame, box, cm, m_left, _nearest_hint(hints, m_left, box), free)
+            if got is None:
                 m_raw = m_raw & ~m_left  # not an object: try what else the box holds
                 continue
+            blob, changed = got
             found.append(blob)
             # a second object in the same box must be substantial: not the rim left around the first
             min_area = max(min_area, 4 * cfg.min_area_px, blob.area // 10)
-            taken = _taken(blob, self._changed(frame, box, blob.gain))
+            taken = _taken(blob, changed)
             m_raw, free = m_raw & ~taken, free & ~taken
             if len(found) == max_objects or int(np.count_nonzero(m_raw)) < min_area:
                 break
         return found
 
-    def _changed(self, frame: StereoFrame, box: Box, gain: float) -> BoolA | None:
-        """Pixels of the box unlike the temporal background (|Γ - g B| > ε + 3 g D); None while moving."""
-        model = self.sub.left_background(frame.gimbal)
-        if model is None:
-            return None
-        x0, y0, x1, y1 = box
-        bg, dev = model[0][y0:y1, x0:x1], model[1][y0:y1, x0:x1]
-        return np.asarray(_change(frame.left[y0:y1, x0:x1], bg, gain) > _strict_limit(dev, gain, self.cfg.epsilon))
-
     def _verify_region(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap, m_left: BoolA,
-                       d_hint: float | None, free: BoolA) -> Blob | None:
-        """Verify one connected region of the left-key mask inside a box."""
+                       d_hint: float | None, free: BoolA) -> tuple[Blob, BoolA | None] | None:
+        """Verify one connected region of the left-key mask inside a box. Returns the blob and, with the
+        cameras still, the box's pixels unlike the temporal background (|Γ - g B| > ε + 3 g D)."""
         cfg = self.cfg
         x0, y0, x1, y1 = box
-        gain = 1.0
+        gain, changed = 1.0, None
         model = self.sub.left_background(frame.gimbal)
         if model is not None and d_hint is not None:
             # a tracked object, cameras still: the temporal model draws the outline inside the left-key
             # region (object and shadow), at the strict threshold (moving background there stays out)
             bg, dev = model
-            obj, gain = _temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1], dev[y0:y1, x0:x1],
-                                          np.zeros_like(m_left), m_left & free, cfg.epsilon)
+            obj, gain, changed = _temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1],
+                                                   dev[y0:y1, x0:x1], np.zeros_like(m_left), m_left & free,
+                                                   cfg.epsilon)
             d0 = d_hint
         else:
             # a new object, or the cameras move: verification by warping in both directions
@@ -231,21 +235,22 @@ class Verifier:
             obj, either, d0 = stereo
             if model is not None:  # cameras still: the temporal model draws the exact outline
                 bg, dev = model
-                obj, gain = _temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1], dev[y0:y1, x0:x1],
-                                              obj, either & free, cfg.epsilon)
+                obj, gain, changed = _temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1],
+                                                       dev[y0:y1, x0:x1], obj, either & free, cfg.epsilon)
         strips = self._strips(frame, box, obj, d0)
         fine = None if strips is None else strips.match(obj, d0, 4)
         if fine is None or strips is None or (strips.clipped and fine.disparity > strips.d_hi - 2.0):
             return None  # no match, or one the image edge may have cut short (the right camera may not see it)
-        ys, xs = np.nonzero(obj)
-        c_raw = np.array([xs.mean() + x0, ys.mean() + y0])  # eq. (10), c(i, j) = the object mask
-        d_bg = _background_disparity(cm, obj, ys, xs, c_raw - (x0, y0))
+        m8 = obj.view(np.uint8)
+        area, c_box = _mask_centroid(m8)
+        c_raw = c_box + (x0, y0)  # eq. (10), c(i, j) = the object mask
+        d_bg = _background_disparity(cm, obj, c_raw - (x0, y0))
         if fine.disparity < d_bg * (1.0 + cfg.min_depth_gap) + cfg.min_disparity_gap_px:
             return None  # not in front of the background: a misregistered background patch
-        rc = self.rect.rect_of_raw[0][y0:y1, x0:x1][ys, xs].astype(np.float64)
-        a = self.rect.area_of_raw[y0:y1, x0:x1][ys, xs].astype(np.float64)
-        c_rect = (a @ rc) / a.sum()  # eq. (10) in rectified coordinates, pixels weighted by their area
-        return Blob(box, obj, int(xs.size), c_raw, c_rect, fine.disparity, fine.sigma, d_bg, fine.score, gain)
+        # eq. (10) in rectified coordinates, pixels weighted by their area: Σ a x / Σ a, Σ a y / Σ a
+        sx, sy, sa, _ = cv2.mean(self.rect.area_moments[y0:y1, x0:x1], mask=m8)
+        return Blob(box, obj, area, c_raw, np.array([sx / sa, sy / sa]), fine.disparity, fine.sigma, d_bg,
+                    fine.score, gain), changed
 
     def _outline_stereo(self, frame: StereoFrame, box: Box, m_left: BoolA,
                         d_hint: float | None) -> tuple[BoolA, BoolA, float] | None:
