@@ -48,6 +48,8 @@ def test_track_prints_one_json_line_per_frame() -> None:
         (("eval",), "give --scenario"),
         (("bench", "--size", "big"), "--size must look like 640x480"),
         (("bench", "--size", "10x10"), "out of range"),
+        (("bench", "--scenario", "nope"), "unknown scenario 'nope'"),
+        (("bench", "--scenario", "manoeuvre"), "is closed-loop"),
         (("track", "--source", "files", "a.mp4", "b.mp4"), "needs --rig"),
         (("track", "--rig", "/nonexistent/rig.json"), "rig file not found"),
         (("track", "--scenario", "nope"), "unknown scenario"),

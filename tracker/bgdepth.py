@@ -39,6 +39,39 @@ class CorrespondenceMap:
     floor: U8
 
 
+@dataclass(frozen=True)
+class _RayGrid:
+    """Per-pixel constants of camera k's pixels (h, w) for mapping them through the background: unit
+    rig-frame rays (h, w, 3); ray·c_k; the ray in the other camera's frame, R_o ray (3, h, w), and the
+    origin there, R_o (c_k - c_o) (3,); the ray's depth along the rectified left z axis r₃·ray (h, w) and
+    the origin's, r₃·(c_k - c_left)."""
+
+    rays: F32
+    ray_dot_c: F32
+    dir_other: F32
+    origin_other: tuple[float, float, float]
+    dir_rect_z: F32
+    origin_rect_z: float
+
+    @staticmethod
+    def of(rect: Rectifier, key: int, rays: F32) -> _RayGrid:
+        rig = rect.rig
+        cam_k, cam_o = (rig.left, rig.right) if key == 0 else (rig.right, rig.left)
+        r64 = rays.astype(np.float64)
+        r3 = (rect.R1 @ rig.left.R_rc)[2]
+        o = cam_o.R_rc @ (cam_k.c - cam_o.c)
+        return _RayGrid(np.ascontiguousarray(rays), (r64 @ cam_k.c).astype(np.float32),
+                        np.ascontiguousarray(np.moveaxis(r64 @ cam_o.R_rc.T, -1, 0), dtype=np.float32),
+                        (float(o[0]), float(o[1]), float(o[2])), (r64 @ r3).astype(np.float32),
+                        float(r3 @ (cam_k.c - rig.left.c)))
+
+    def crop(self, box: tuple[int, int, int, int]) -> _RayGrid:
+        """The constants of the pixels in box = (x0, y0, x1, y1)."""
+        x0, y0, x1, y1 = box
+        return _RayGrid(self.rays[y0:y1, x0:x1], self.ray_dot_c[y0:y1, x0:x1], self.dir_other[:, y0:y1, x0:x1],
+                        self.origin_other, self.dir_rect_z[y0:y1, x0:x1], self.origin_rect_z)
+
+
 def _remap_f32(img: F32, mx: F32, my: F32) -> F32:
     """Bilinear sample of a float image at float coordinates of any 2-D shape (0 outside)."""
     return np.asarray(cv2.remap(img, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0.0))
@@ -59,6 +92,7 @@ class BackgroundDepth:
         self.rays = tuple(self._rays(cam) for cam in (rect.rig.left, rect.rig.right))
         # per key camera: residual of eq. (9) on the surveyed empty scene, per world direction
         self.floors = (np.zeros(self.canvas.shape, np.uint8), np.zeros(self.canvas.shape, np.uint8))
+        self._grids: dict[tuple[int, int], _RayGrid] = {}
 
     @staticmethod
     def _rays(cam: Camera) -> F32:
@@ -110,7 +144,7 @@ class BackgroundDepth:
         ref = cv2.remap(img_o, cm.map_x, cm.map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
         resid = np.asarray(cv2.absdiff(img_k, ref), np.uint8)
         resid = np.asarray(cv2.subtract(resid, np.full_like(resid, 3)), np.uint8)
-        pu, pv = self._to_canvas(self._directions(key, frame.gimbal, 1, None)[1])
+        pu, pv = self._canvas_coords(self._grid(key, 1).rays, frame.gimbal)
         iu, iv = np.round(pu).astype(int).ravel(), np.round(pv).astype(int).ravel()
         vals = resid.ravel()
         ok = (iu >= 0) & (iv >= 0) & (iu < self.canvas.shape[1]) & (iv < self.canvas.shape[0])
@@ -142,57 +176,53 @@ class BackgroundDepth:
         self.canvas = np.where(inv >= 1e6, 0.0, inv).astype(np.float32)
 
     # -- lookup -----------------------------------------------------------------------------------
-    def _directions(self, key: int, gimbal: GimbalState | None, step: int,
-                    box: tuple[int, int, int, int] | None) -> tuple[F32, F32, F32]:
-        """Rig-frame rays (h, w, 3) of the key pixels on the grid, their world directions (h, w, 3), and
-        R_world_rig (3, 3) for the gimbal angles."""
-        rays = self._grid_rays(key, step, box)
+    def _grid(self, key: int, step: int) -> _RayGrid:
+        """The per-pixel constants of camera `key`'s pixels on a grid of the given step (cached)."""
+        g = self._grids.get((key, step))
+        if g is None:
+            g = self._grids[(key, step)] = _RayGrid.of(self.rect, key, self.rays[key][::step, ::step])
+        return g
+
+    def _canvas_coords(self, rays: F32, gimbal: GimbalState | None) -> tuple[F32, F32]:
+        """Canvas coordinates (u, v) of rig-frame rays (h, w, 3) at the gimbal angles: the world direction
+        w = R_world_rig ray seen by the canvas pinhole, u = f w_x / w_z + c_x, v = f w_y / w_z + c_y."""
         g = gimbal or GimbalState()
-        R_wr = gimbal_rotation(g.pan_deg, g.tilt_deg).astype(np.float32)
-        return rays, rays @ R_wr.T, R_wr
+        K = np.array([[self.f, 0.0, self.cx], [0.0, self.f, self.cy], [0.0, 0.0, 1.0]])
+        h = np.asarray(cv2.transform(rays, (K @ gimbal_rotation(g.pan_deg, g.tilt_deg)).astype(np.float32)))
+        return (np.asarray(cv2.divide(h[..., 0], h[..., 2]), np.float32),
+                np.asarray(cv2.divide(h[..., 1], h[..., 2]), np.float32))
 
     def _to_canvas(self, w: NDArray[np.floating]) -> tuple[F32, F32]:
         """Canvas coordinates (u, v) of world directions (..., 3): the virtual pinhole at home."""
         return (np.asarray(self.f * w[..., 0] / w[..., 2] + self.cx, np.float32),
                 np.asarray(self.f * w[..., 1] / w[..., 2] + self.cy, np.float32))
 
-    def _grid_rays(self, key: int, step: int, box: tuple[int, int, int, int] | None) -> F32:
-        rays = self.rays[key]
-        if box is not None:
-            x0, y0, x1, y1 = box
-            rays = rays[y0:y1, x0:x1]
-        return rays[::step, ::step]
-
     def correspondence(self, key: int, gimbal: GimbalState | None, step: int = 1,
                        box: tuple[int, int, int, int] | None = None, with_floor: bool = True
                        ) -> CorrespondenceMap:
         """Background correspondences from camera `key` (0 left, 1 right) into the other camera, for key
-        pixels on a grid with the given step, optionally only inside box = (x0, y0, x1, y1)."""
-        rig = self.rect.rig
-        cam_k, cam_r = (rig.left, rig.right) if key == 0 else (rig.right, rig.left)
-        rays, w, R_wr = self._directions(key, gimbal, step, box)
-        pu, pv = self._to_canvas(w)
-        inv = _remap_f32(self.canvas, pu, pv)
+        pixels on a grid with the given step, optionally only inside box = (x0, y0, x1, y1) (full-size
+        pixels; with a step, grid cells)."""
+        g = self._grid(key, step)
+        if box is not None:
+            g = g.crop(box)
+        pu, pv = self._canvas_coords(g.rays, gimbal)
+        inv = _remap_f32(self.canvas, pu, pv)  # 1/ρ of the background in that direction
         floor = (np.asarray(cv2.remap(self.floors[key], pu, pv, cv2.INTER_NEAREST,
                                       borderMode=cv2.BORDER_CONSTANT, borderValue=0), np.uint8)
                  if with_floor else np.zeros(pu.shape, np.uint8))
         valid = inv > 0
-        t = 1.0 / np.where(valid, inv, np.float32(1.0))
-        # ρ is measured from the pivot; the ray starts at the lens centre c: first-order correction
-        c_w = (R_wr @ cam_k.c.astype(np.float32))
-        t = t - (w @ c_w)
-        X = cam_k.c.astype(np.float32) + t[..., None] * rays  # rig frame (h, w, 3)
-        Xc = (X - cam_r.c.astype(np.float32)) @ cam_r.R_rc.T.astype(np.float32)
-        z = Xc[..., 2]
-        mx, my = cam_r.distort_normalized(Xc[..., 0] / z, Xc[..., 1] / z)
+        # distance along the ray from the lens centre c_k: ρ is measured from the pivot, so to first
+        # order t = ρ - ray·c_k; the point is X = c_k + t ray (rig frame)
+        t = np.asarray(cv2.divide(1.0, np.where(valid, inv, np.float32(1.0))), np.float32) - g.ray_dot_c
+        # in the other camera: X_o = R_o (X - c_o) = R_o (c_k - c_o) + t R_o ray
+        a = g.origin_other
+        x, y, z = (a[0] + t * g.dir_other[0], a[1] + t * g.dir_other[1], a[2] + t * g.dir_other[2])
+        cam_r = self.rect.rig.right if key == 0 else self.rect.rig.left
+        mx, my = cam_r.distort_normalized(x / z, y / z)
         W, H = cam_r.size
         valid &= (z > 0) & (mx >= 0) & (my >= 0) & (mx <= W - 1) & (my <= H - 1)
-        disp = self._disparity(X.astype(np.float32))  # X is in the rig frame whichever camera is key
-        return CorrespondenceMap(mx.astype(np.float32), my.astype(np.float32), valid, disp, floor)
-
-    def _disparity(self, X_rig: F32) -> F32:
-        """Rectified disparity f b / z_rect of rig points (h, w, 3)."""
-        r = self.rect
-        L = r.rig.left
-        z = ((X_rig - L.c.astype(np.float32)) @ (r.R1 @ L.R_rc).astype(np.float32).T)[..., 2]
-        return np.asarray(np.float32(r.f * r.b) / np.maximum(z, np.float32(1e-3)), dtype=np.float32)
+        # rectified disparity f b / z_rect, z_rect = r₃·(X - c_left) = r₃·(c_k - c_left) + t r₃·ray
+        z_rect = g.origin_rect_z + t * g.dir_rect_z
+        disp = np.float32(self.rect.f * self.rect.b) / np.maximum(z_rect, np.float32(1e-3))
+        return CorrespondenceMap(np.asarray(mx, np.float32), np.asarray(my, np.float32), valid, disp, floor)

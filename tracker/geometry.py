@@ -90,13 +90,15 @@ class Camera:
 
     def distort_normalized(self, xn: F64, yn: F64) -> tuple[F64, F64]:
         """Undistorted normalized coordinates -> distorted pixel coordinates (arrays of any shape)."""
-        k1, k2, p1, p2, k3 = self.dist
+        k1, k2, p1, p2, k3 = (float(k) for k in self.dist)  # Python floats: float32 input stays float32
         r2 = xn * xn + yn * yn
         radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))
-        xd = xn * radial + 2.0 * p1 * xn * yn + p2 * (r2 + 2.0 * xn * xn)
-        yd = yn * radial + p1 * (r2 + 2.0 * yn * yn) + 2.0 * p2 * xn * yn
-        K = self.K
-        return K[0, 0] * xd + K[0, 1] * yd + K[0, 2], K[1, 1] * yd + K[1, 2]
+        xy = xn * yn
+        xd = xn * radial + 2.0 * p1 * xy + p2 * (r2 + 2.0 * xn * xn)
+        yd = yn * radial + p1 * (r2 + 2.0 * yn * yn) + 2.0 * p2 * xy
+        fx, s, cx, fy, cy = (float(self.K[0, 0]), float(self.K[0, 1]), float(self.K[0, 2]), float(self.K[1, 1]),
+                             float(self.K[1, 2]))
+        return fx * xd + s * yd + cx, fy * yd + cy
 
     def undistort_pixels(self, u: F64, v: F64, iterations: int = 8) -> tuple[F64, F64]:
         """Distorted pixel coordinates -> undistorted normalized coordinates (fixed-point iteration)."""
