@@ -42,7 +42,10 @@ class DetectorConfig:
     """epsilon: eq. (9) threshold ε in grey levels; stride: candidate-search subsampling; min_area_px:
     smallest object (full-resolution pixels); absorb_s: how long a stopped object takes to merge into the
     background; margin_px: box padding; min_depth_gap: an object's disparity must exceed the background's
-    by this fraction plus `min_disparity_gap_px`."""
+    by this fraction plus `min_disparity_gap_px`. moving_min_cells: while the cameras move, a candidate
+    needs this many stride cells above the threshold unless a track is predicted inside its box (a moving
+    view samples the background's edges at new sub-pixel phases, which leaves isolated residuals; a new
+    object must then cover about moving_min_cells · stride² pixels to be picked up)."""
 
     epsilon: int = 12
     stride: int = 4
@@ -53,6 +56,7 @@ class DetectorConfig:
     min_depth_gap: float = 0.04
     min_disparity_gap_px: float = 0.5
     max_disparity: int = 160
+    moving_min_cells: int = 3
 
     def __post_init__(self) -> None:
         if not 1 <= self.epsilon <= 254:
@@ -63,6 +67,43 @@ class DetectorConfig:
             raise ValueError("min_area_px, absorb_s and fps must be positive")
 
 
+class _LazyMap:
+    """The full-resolution correspondence map of camera `key` at one pose, computed tile by tile as boxes
+    ask for it (the first frame at a new pose maps only what it verifies, not the whole image)."""
+
+    TILE = 32
+
+    def __init__(self, bg: BackgroundDepth, key: int, gimbal: GimbalState | None):
+        self.bg, self.key, self.gimbal = bg, key, gimbal
+        w, h = bg.rect.rig.left.size
+        self.size = (w, h)
+        self.map_x, self.map_y = np.zeros((h, w), np.float32), np.zeros((h, w), np.float32)
+        self.valid = np.zeros((h, w), bool)
+        self.disparity = np.zeros((h, w), np.float32)
+        self.floor = np.zeros((h, w), np.uint8)
+        t = self.TILE
+        self.done = np.zeros(((h + t - 1) // t, (w + t - 1) // t), bool)
+
+    def get(self, box: Box) -> CorrespondenceMap:
+        x0, y0, x1, y1 = box
+        t = self.TILE
+        tx0, ty0, tx1, ty1 = x0 // t, y0 // t, (x1 + t - 1) // t, (y1 + t - 1) // t
+        todo = ~self.done[ty0:ty1, tx0:tx1]
+        if todo.any():  # map the bounding box of the missing tiles in one go
+            ys, xs = np.nonzero(todo)
+            a, b = ty0 + int(ys.min()), ty0 + int(ys.max()) + 1
+            c, d = tx0 + int(xs.min()), tx0 + int(xs.max()) + 1
+            fill = (c * t, a * t, min(d * t, self.size[0]), min(b * t, self.size[1]))
+            cm = self.bg.correspondence(self.key, self.gimbal, box=fill)
+            sl = (slice(fill[1], fill[3]), slice(fill[0], fill[2]))
+            for name in ("map_x", "map_y", "valid", "disparity", "floor"):
+                getattr(self, name)[sl] = getattr(cm, name)
+            self.done[a:b, c:d] = True
+        sl = (slice(y0, y1), slice(x0, x1))
+        return CorrespondenceMap(self.map_x[sl], self.map_y[sl], self.valid[sl], self.disparity[sl],
+                                 self.floor[sl])
+
+
 @dataclass
 class _PoseMaps:
     """Correspondence maps for one gimbal pose: low-res for candidates, full-res ones filled lazily."""
@@ -71,16 +112,25 @@ class _PoseMaps:
     low: CorrespondenceMap
     low_fixed: NDArray[np.int16]
     valid_u8: U8
-    full: dict[int, CorrespondenceMap] = field(default_factory=dict)
+    full: dict[int, _LazyMap] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
 class Candidates:
-    """Candidate boxes (raw left pixels, x0 y0 x1 y1) and the low-resolution residual image."""
+    """Candidate boxes (raw left pixels, x0 y0 x1 y1), the number of stride cells above the threshold in
+    each, the low-resolution residual image and whether the cameras moved since the last frame."""
 
     boxes: tuple[Box, ...]
+    cells: tuple[int, ...]
     residual: U8
     moving: bool
+
+    def worth_verifying(self, min_cells: int, hints: NDArray[np.float64] | None) -> tuple[Box, ...]:
+        """The boxes with at least min_cells cells, or with a predicted track position (x, y) inside."""
+        def tracked(b: Box) -> bool:
+            return hints is not None and any(b[0] <= h[0] < b[2] and b[1] <= h[1] < b[3] for h in hints)
+
+        return tuple(b for b, n in zip(self.boxes, self.cells, strict=True) if n >= min_cells or tracked(b))
 
 
 class StereoSubtractor:
@@ -122,18 +172,14 @@ class StereoSubtractor:
 
     def correspondence(self, key: int, gimbal: GimbalState | None, box: Box) -> CorrespondenceMap:
         """Full-resolution correspondence for the pixels in `box` of camera `key`. While the pose stays,
-        the whole image's map is computed once and sliced."""
+        the map is kept and filled in tiles as boxes need them; while it moves, only the box is mapped."""
+        if self.moving:  # the pose changes every frame
+            return self.bg.correspondence(key, gimbal, box=box)
         pm = self.maps(gimbal)
         full = pm.full.get(key)
         if full is None:
-            if self.moving:  # the pose changes every frame: map only the box
-                return self.bg.correspondence(key, gimbal, box=box)
-            full = self.bg.correspondence(key, gimbal)
-            pm.full[key] = full
-        x0, y0, x1, y1 = box
-        sl = (slice(y0, y1), slice(x0, x1))
-        return CorrespondenceMap(full.map_x[sl], full.map_y[sl], full.valid[sl], full.disparity[sl],
-                                 full.floor[sl])
+            full = pm.full[key] = _LazyMap(self.bg, key, gimbal)
+        return full.get(box)
 
     def prime(self, frame: StereoFrame) -> None:
         """Start the temporal model from an empty-scene pair at its pose: the background image B. The
@@ -203,27 +249,29 @@ class StereoSubtractor:
         excess = cv2.subtract(resid, self.floor)
         fg = np.asarray(cv2.threshold(excess, self.cfg.epsilon, 255, cv2.THRESH_BINARY)[1], np.uint8)
         cv2.bitwise_and(fg, pm.valid_u8, dst=fg)
-        boxes = self._boxes(fg)
+        boxes, cells = self._boxes(fg)
         cv2.min(self.floor, resid, dst=self.floor)  # the floor falls at once
         self._pending = (resid, moving)
-        return Candidates(boxes, resid, moving)
+        return Candidates(boxes, cells, resid, moving)
 
-    def _boxes(self, fg: U8) -> tuple[Box, ...]:
+    def _boxes(self, fg: U8) -> tuple[tuple[Box, ...], tuple[int, ...]]:
+        """Boxes around groups of candidate cells (raw pixels, with a margin) and the cells in each."""
         s, m = self.cfg.stride, self.cfg.margin_px
         if cv2.countNonZero(fg) == 0:
-            return ()
+            return (), ()
         grown = cv2.dilate(fg, np.ones((3, 3), np.uint8))
         contours, _ = cv2.findContours(grown, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
         h, w = self.bg.rect.rig.left.size[1], self.bg.rect.rig.left.size[0]
         min_low = max(2, self.cfg.min_area_px // (s * s) // 2)
-        out = []
+        out, cells = [], []
         for c in contours:
             x, y, bw, bh = cv2.boundingRect(c)
             if bw * bh < min_low:
                 continue
             out.append((max(x * s - m, 0), max(y * s - m, 0), min((x + bw) * s + m, w),
                         min((y + bh) * s + m, h)))
-        return tuple(out)
+            cells.append(cv2.countNonZero(fg[y:y + bh, x:x + bw]))
+        return tuple(out), tuple(cells)
 
     def update_floor(self, foreground_low: U8 | None) -> None:
         """Let the floor rise by one grey level where the residual is above it: every frame for
