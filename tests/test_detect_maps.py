@@ -30,8 +30,8 @@ def test_tiled_maps_equal_direct_maps_and_fill_only_what_boxes_need() -> None:
         assert 0 < lazy.done.sum() < lazy.done.size // 2  # not the whole image
 
 
-def _cands(boxes: list[tuple[int, int, int, int]], cells: list[int]) -> Candidates:
-    return Candidates(tuple(boxes), tuple(cells), np.zeros((120, 160), np.uint8), True)
+def _cands(boxes: list[tuple[int, int, int, int]], cells: list[int], moving: bool = True) -> Candidates:
+    return Candidates(tuple(boxes), tuple(cells), np.zeros((120, 160), np.uint8), moving)
 
 
 def test_small_candidates_are_verified_only_where_a_track_is_predicted() -> None:
@@ -39,3 +39,5 @@ def test_small_candidates_are_verified_only_where_a_track_is_predicted() -> None
     assert c.worth_verifying(3, None) == ((300, 300, 360, 360),)
     hints = np.array([[110.0, 120.0, 20.0]])  # a track predicted inside the second box
     assert c.worth_verifying(3, hints) == ((100, 100, 130, 130), (300, 300, 360, 360))
+    still = _cands([(0, 0, 20, 20), (300, 300, 360, 360)], [1, 5], moving=False)
+    assert still.worth_verifying(3, None) == still.boxes  # cameras still: every candidate is verified

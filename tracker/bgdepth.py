@@ -8,7 +8,7 @@ matching, and turns it into per-pixel correspondence maps for any gimbal pose.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import cv2
 import numpy as np
@@ -37,6 +37,17 @@ class CorrespondenceMap:
     valid: NDArray[np.bool_]
     disparity: F32
     floor: U8
+
+    def crop(self, box: tuple[int, int, int, int]) -> CorrespondenceMap:
+        """The maps of the grid pixels in box = (x0, y0, x1, y1) (views, not copies)."""
+        x0, y0, x1, y1 = box
+        return CorrespondenceMap(*(getattr(self, f.name)[y0:y1, x0:x1] for f in fields(CorrespondenceMap)))
+
+    def paste(self, box: tuple[int, int, int, int], part: CorrespondenceMap) -> None:
+        """Write `part`'s maps into the pixels of box = (x0, y0, x1, y1)."""
+        x0, y0, x1, y1 = box
+        for f in fields(CorrespondenceMap):
+            getattr(self, f.name)[y0:y1, x0:x1] = getattr(part, f.name)
 
 
 @dataclass(frozen=True)

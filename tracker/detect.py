@@ -77,10 +77,8 @@ class _LazyMap:
         self.bg, self.key, self.gimbal = bg, key, gimbal
         w, h = bg.rect.rig.left.size
         self.size = (w, h)
-        self.map_x, self.map_y = np.zeros((h, w), np.float32), np.zeros((h, w), np.float32)
-        self.valid = np.zeros((h, w), bool)
-        self.disparity = np.zeros((h, w), np.float32)
-        self.floor = np.zeros((h, w), np.uint8)
+        self.map = CorrespondenceMap(np.zeros((h, w), np.float32), np.zeros((h, w), np.float32),
+                                     np.zeros((h, w), bool), np.zeros((h, w), np.float32), np.zeros((h, w), np.uint8))
         t = self.TILE
         self.done = np.zeros(((h + t - 1) // t, (w + t - 1) // t), bool)
 
@@ -94,14 +92,9 @@ class _LazyMap:
             a, b = ty0 + int(ys.min()), ty0 + int(ys.max()) + 1
             c, d = tx0 + int(xs.min()), tx0 + int(xs.max()) + 1
             fill = (c * t, a * t, min(d * t, self.size[0]), min(b * t, self.size[1]))
-            cm = self.bg.correspondence(self.key, self.gimbal, box=fill)
-            sl = (slice(fill[1], fill[3]), slice(fill[0], fill[2]))
-            for name in ("map_x", "map_y", "valid", "disparity", "floor"):
-                getattr(self, name)[sl] = getattr(cm, name)
+            self.map.paste(fill, self.bg.correspondence(self.key, self.gimbal, box=fill))
             self.done[a:b, c:d] = True
-        sl = (slice(y0, y1), slice(x0, x1))
-        return CorrespondenceMap(self.map_x[sl], self.map_y[sl], self.valid[sl], self.disparity[sl],
-                                 self.floor[sl])
+        return self.map.crop(box)
 
 
 @dataclass
@@ -126,10 +119,13 @@ class Candidates:
     moving: bool
 
     def worth_verifying(self, min_cells: int, hints: NDArray[np.float64] | None) -> tuple[Box, ...]:
-        """The boxes with at least min_cells cells, or with a predicted track position (x, y) inside."""
+        """The boxes to verify: all of them with the cameras still; while they move, those with at least
+        min_cells cells or with a predicted track position (x, y) inside."""
         def tracked(b: Box) -> bool:
             return hints is not None and any(b[0] <= h[0] < b[2] and b[1] <= h[1] < b[3] for h in hints)
 
+        if not self.moving:
+            return self.boxes
         return tuple(b for b, n in zip(self.boxes, self.cells, strict=True) if n >= min_cells or tracked(b))
 
 

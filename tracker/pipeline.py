@@ -81,7 +81,7 @@ class Pipeline:
         cands = self.subtractor.step(frame)
         t1 = time.perf_counter()
         hints = self.tracker.predictions(frame.t)
-        boxes = cands.worth_verifying(self.subtractor.cfg.moving_min_cells, hints) if cands.moving else cands.boxes
+        boxes = cands.worth_verifying(self.subtractor.cfg.moving_min_cells, hints)
         blobs = [b for box in boxes for b in self.verifier.verify_all(frame, box, hints)]
         t2 = time.perf_counter()
         locs = [self.localizer.locate(b.centroid_rect, b.disparity, b.disparity_sigma, b.area, frame.gimbal)
