@@ -21,7 +21,7 @@ def test_track_servo_sim_prints_servo_telemetry() -> None:
     lines = [json.loads(x) for x in out.stdout.splitlines()]
     assert [x["frame"] for x in lines] == list(range(40))
     for x in lines:
-        assert set(x["servo"]) == {"pan_deg", "tilt_deg", "command", "fault"}
+        assert set(x["servo"]) >= {"pan_deg", "tilt_deg", "command", "fault", "mode"}
         assert x["servo"]["fault"] is None and x["latency_ms"] > 0.0
     sent = [x["servo"]["command"] for x in lines if x["servo"]["command"] is not None]
     assert sent and all(c["reason"] in ("track", "centroid") for c in sent)

@@ -150,6 +150,13 @@ class StereoSubtractor:
         self.left_bg: dict[tuple[float, float], tuple[NDArray[np.float32], NDArray[np.float32]]] = {}
         self._stripe = 0
 
+    def reconfigure(self, config: DetectorConfig) -> None:
+        """Use new settings from the next frame on; the stride (the shape of the candidate grid) is fixed."""
+        if config.stride != self.cfg.stride:
+            raise ValueError(f"stride cannot change while running ({self.cfg.stride} -> {config.stride})")
+        self.cfg = config
+        self._fg_every = max(1, round(config.absorb_s * config.fps / 100.0))
+
     # -- correspondence maps ----------------------------------------------------------------------
     def maps(self, gimbal: GimbalState | None) -> _PoseMaps:
         g = gimbal or GimbalState()

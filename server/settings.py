@@ -1,0 +1,83 @@
+"""Server settings (pydantic-settings): defaults, then `DATA/tmeye.toml`, then environment variables
+`TMEYE_<NAME>`, then the command line (highest). Every setting is documented in its description."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from pydantic import Field, field_validator
+from pydantic_settings import BaseSettings, PydanticBaseSettingsSource, SettingsConfigDict, TomlConfigSettingsSource
+
+DEFAULT_DATA_DIR = "./tmeye-data"
+
+
+class Settings(BaseSettings):
+    """Everything `tmeye serve` can be told."""
+
+    model_config = SettingsConfigDict(env_prefix="TMEYE_", extra="forbid")
+
+    host: str = Field("127.0.0.1", description="address to listen on")
+    port: int = Field(8080, ge=0, le=65535, description="TCP port (0: any free port)")
+    data_dir: Path = Field(Path(DEFAULT_DATA_DIR), description="database, keys, calibration uploads, logs")
+    source: str = Field("sim", description="frame source: sim, files, usb or rtsp")
+    inputs: list[str] = Field(default_factory=list, description="LEFT RIGHT inputs of a real source")
+    scenario: str = Field("endless", description="simulated scene (sim source); finite ones repeat")
+    seed: int = Field(0, description="seed of the simulated scene")
+    rig: str | None = Field(None, description="rig file; default: the active calibration record, "
+                                              "else the simulator's own rig")
+    servo: str = Field("sim", description="servo: sim (simulated gimbal), none, or a driver URL "
+                                          "(maestro:/dev/ttyACM0, ascii:/dev/ttyUSB0)")
+    realtime: bool = Field(True, description="pace the tracker at the source's frame rate")
+    token_ttl_s: int = Field(12 * 3600, ge=60, le=30 * 86400, description="session lifetime (s)")
+    cookie_secure: bool = Field(False, description="mark the session cookie Secure (set when behind HTTPS)")
+    login_user_failures: int = Field(5, ge=1, description="failed logins per username per window before 429")
+    login_address_failures: int = Field(20, ge=1, description="failed logins per address per window before 429")
+    login_window_s: int = Field(600, ge=1, description="login throttling window (s)")
+    ws_queue: int = Field(8, ge=1, le=1024, description="telemetry messages queued per WebSocket client "
+                                                        "before the oldest is dropped")
+    track_sample_hz: float = Field(10.0, gt=0, le=30, description="trajectory samples stored per second per track")
+    track_flush_s: float = Field(1.0, gt=0, le=60, description="how often the track writer commits (s)")
+    ice_servers: list[str] = Field(default_factory=list, description="STUN/TURN URLs for WebRTC (none by default)")
+    log_level: str = Field("info", description="debug, info, warning or error")
+
+    @field_validator("source")
+    @classmethod
+    def _source(cls, v: str) -> str:
+        if v not in ("sim", "files", "usb", "rtsp"):
+            raise ValueError(f"unknown source {v!r}; use sim, files, usb or rtsp")
+        return v
+
+    @field_validator("log_level")
+    @classmethod
+    def _level(cls, v: str) -> str:
+        if v.lower() not in ("debug", "info", "warning", "error"):
+            raise ValueError(f"unknown log level {v!r}")
+        return v.lower()
+
+    @classmethod
+    def settings_customise_sources(
+        cls, settings_cls: type[BaseSettings], init_settings: PydanticBaseSettingsSource,
+        env_settings: PydanticBaseSettingsSource, dotenv_settings: PydanticBaseSettingsSource,
+        file_secret_settings: PydanticBaseSettingsSource,
+    ) -> tuple[PydanticBaseSettingsSource, ...]:
+        return init_settings, env_settings, _data_dir_toml(settings_cls, init_settings, env_settings)
+
+    @property
+    def db_path(self) -> Path:
+        return self.data_dir / "tmeye.db"
+
+    @property
+    def db_url(self) -> str:
+        return f"sqlite:///{self.db_path}"
+
+
+def _data_dir_toml(settings_cls: type[BaseSettings], *higher: PydanticBaseSettingsSource) -> PydanticBaseSettingsSource:
+    """The `tmeye.toml` of the data directory chosen by the higher-priority sources (or the default)."""
+    data_dir: Any = DEFAULT_DATA_DIR
+    for src in higher:
+        found = src().get("data_dir")
+        if found:
+            data_dir = found
+            break
+    return TomlConfigSettingsSource(settings_cls, toml_file=Path(data_dir) / "tmeye.toml")

@@ -1,0 +1,231 @@
+"""Composition of one rig: source, rig, background survey, pipeline, predictor, aim controller and servo
+driver, from a `RuntimeConfig`. Used by the runtime (and so by `tmeye track` and `tmeye serve` alike).
+
+Problems a user can fix (unknown scenario, missing rig file, a source or servo that will not open) raise
+`ComposeError` with a one-line message.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from tmeye.runtime.config import RuntimeConfig, TrackerTuning
+from tracker.aim import AimController
+from tracker.closedloop import LoopConfig, ServoLoop, ServoSimSource, background_range, survey_grid, widen_background
+from tracker.closedloop_eval import closed_loop_imm, mount_range
+from tracker.evaluation import survey_poses
+from tracker.frames import FrameSource, GimbalState, StereoFrame
+from tracker.geometry import StereoRig, load_rig
+from tracker.pipeline import Pipeline
+from tracker.servo import ServoError, SimulatedGimbal, open_servo
+from tracker.servo.base import ServoDriver
+from tracker.sim.scenarios import SimFrame, SimRig, get_scenario
+
+
+class ComposeError(ValueError):
+    """The configuration cannot be composed into a running rig; the message is one line."""
+
+
+class LoopingSim:
+    """A finite simulated scenario repeated forever: after its last frame it starts again, while frame
+    indices and times keep increasing (the predictor, the aim controller and the simulated gimbal never
+    see time go backwards). Has SimRig's frame-source surface (index, scenario, exhausted, step, read)."""
+
+    def __init__(self, sim: SimRig):
+        self.sim = sim
+        self.scenario = sim.scenario
+        self.rig = sim.rig
+        self.index = 0
+        self._offset_frames = 0
+
+    @property
+    def exhausted(self) -> bool:
+        return False
+
+    def background(self, gimbal: GimbalState | None = None) -> StereoFrame:
+        return self.sim.background(gimbal)
+
+    def skip(self, n: int) -> None:
+        for _ in range(n):
+            self._wrap()
+            self.sim.index += 1
+            self.index += 1
+
+    def step(self, gimbal: GimbalState | None = None) -> SimFrame:
+        self._wrap()
+        sf = self.sim.step(gimbal)
+        dt = self._offset_frames / self.scenario.fps
+        f = sf.frame
+        frame = replace(f, index=self.index, t_left=f.t_left + dt, t_right=f.t_right + dt)
+        self.index += 1
+        return SimFrame(frame, sf.truth)
+
+    def read(self) -> StereoFrame | None:
+        return self.step().frame
+
+    def close(self) -> None:
+        self.sim.close()
+
+    def _wrap(self) -> None:
+        if self.sim.exhausted:
+            self._offset_frames += self.sim.index
+            self.sim.index = 0
+
+
+@dataclass
+class Composition:
+    """The parts of one running rig. `source` yields frames; `loop` is None when no servo is driven;
+    `sim` is the simulated rig when the source is simulated (for ground truth and skipping)."""
+
+    config: RuntimeConfig
+    rig: StereoRig
+    source: FrameSource
+    pipeline: Pipeline
+    loop: ServoLoop | None
+    controller: AimController | None
+    driver: ServoDriver | None
+    sim: SimRig | LoopingSim | None
+    fps: float
+
+    def close(self) -> None:
+        try:
+            self.source.close()
+        finally:
+            if self.driver is not None:
+                self.driver.close()
+
+
+def compose(cfg: RuntimeConfig, tuning: TrackerTuning | None = None, rig: StereoRig | None = None) -> Composition:
+    """Open the source and the servo, learn the background and build the loop. `rig` overrides the
+    config's rig file (an activated calibration record)."""
+    tuning = tuning or TrackerTuning()
+    if rig is None and cfg.rig:
+        try:
+            rig = load_rig(cfg.rig)
+        except (OSError, ValueError, KeyError) as exc:
+            raise ComposeError(f"rig file {cfg.rig}: {exc}") from None
+    if cfg.source == "sim":
+        return _compose_sim(cfg, tuning, rig)
+    return _compose_real(cfg, tuning, rig)
+
+
+def _pipeline(rig: StereoRig, cfg: RuntimeConfig, tuning: TrackerTuning, fps: float) -> Pipeline:
+    return Pipeline(rig, replace(tuning.detector, fps=fps), tuning.tracks, origin=np.array(cfg.origin, float))
+
+
+def _compose_sim(cfg: RuntimeConfig, tuning: TrackerTuning, rig: StereoRig | None) -> Composition:
+    try:
+        scenario = get_scenario(cfg.scenario)
+    except ValueError as exc:
+        raise ComposeError(str(exc)) from None
+    raw = SimRig(scenario, seed=cfg.seed)
+    sim: SimRig | LoopingSim = LoopingSim(raw) if cfg.loop_source and scenario.frames is not None else raw
+    rig = rig or raw.rig
+    pipe = _pipeline(rig, cfg, tuning, scenario.fps)
+    driver = _open_driver(cfg)
+    source: FrameSource = sim
+    loop = controller = None
+    try:
+        if driver is not None:
+            pan, tilt = mount_range(scenario)
+            widen_background(pipe, *background_range(pan, tilt, rig.left.size, pipe.rect.f))
+            poses = survey_grid(pan, tilt)
+            controller = _controller(pipe, tuning)
+            source = ServoSimSource(sim, driver, lambda: controller.setpoint)  # type: ignore[arg-type]
+            loop = _loop(pipe, controller, driver)
+        else:
+            poses = survey_poses(scenario)
+        for g in poses:
+            pipe.learn_background(raw.background(g))
+    except BaseException:
+        if driver is not None:
+            driver.close()
+        raise
+    return Composition(cfg, rig, source, pipe, loop, controller, driver, sim, scenario.fps)
+
+
+def _compose_real(cfg: RuntimeConfig, tuning: TrackerTuning, rig: StereoRig | None) -> Composition:
+    from tracker.sources import SourceError, open_source
+
+    if rig is None:
+        raise ComposeError(f"source {cfg.source} needs a rig file (make one with `tmeye calibrate`)")
+    driver = _open_driver(cfg)
+    if isinstance(driver, SimulatedGimbal):
+        driver.close()
+        raise ComposeError("servo sim drives the simulated rig: use it with the simulated source")
+    try:
+        src = open_source(cfg.source, list(cfg.inputs))
+    except SourceError as exc:
+        if driver is not None:
+            driver.close()
+        raise ComposeError(str(exc)) from None
+    first = src.read()
+    if first is None:
+        src.close()
+        if driver is not None:
+            driver.close()
+        raise ComposeError(f"{cfg.source} source gave no frames")
+    fps = float(getattr(src, "fps", 0.0) or 30.0)
+    pipe = _pipeline(rig, cfg, tuning, fps)
+    pipe.learn_background(first)  # the first pair is taken as the empty background
+    controller = _controller(pipe, tuning) if driver is not None else None
+    loop = _loop(pipe, controller, driver) if controller is not None and driver is not None else None
+    return Composition(cfg, rig, src, pipe, loop, controller, driver, None, fps)
+
+
+def _open_driver(cfg: RuntimeConfig) -> ServoDriver | None:
+    if not cfg.servo or cfg.servo == "none":
+        return None
+    try:
+        return open_servo(cfg.servo)
+    except ServoError as exc:
+        raise ComposeError(str(exc)) from None
+
+
+def _controller(pipe: Pipeline, tuning: TrackerTuning) -> AimController:
+    return AimController(replace(tuning.aim, frame_width_px=pipe.rig.left.size[0], focal_px=pipe.rect.f))
+
+
+def _loop(pipe: Pipeline, controller: AimController, driver: ServoDriver) -> ServoLoop:
+    lead = 0.09
+    latency: float | None = None
+    if isinstance(driver, SimulatedGimbal):
+        lead = driver.config.latency_s + driver.config.time_constant_s
+        latency = 0.005  # simulated time: the loop's budget
+    return ServoLoop(pipe, controller, closed_loop_imm(), driver, LoopConfig(lead_s=lead, latency_s=latency))
+
+
+def rebuild_pipeline(comp: Composition, rig: StereoRig, tuning: TrackerTuning) -> Composition:
+    """A new pipeline (and servo loop, sharing the running controller and driver) for `rig` on the same
+    source. For the simulator the background is learnt from a second renderer of the same scene (the
+    running one belongs to the worker); a real source's is learnt by the worker from its next frame."""
+    pipe = _pipeline(rig, comp.config, tuning, comp.fps)
+    if comp.sim is not None:
+        scenario = comp.sim.scenario
+        twin = SimRig(scenario, seed=comp.config.seed)
+        if comp.loop is not None:
+            pan, tilt = mount_range(scenario)
+            widen_background(pipe, *background_range(pan, tilt, rig.left.size, pipe.rect.f))
+            poses = survey_grid(pan, tilt)
+        else:
+            poses = survey_poses(scenario)
+        for g in poses:
+            pipe.learn_background(twin.background(g))
+    loop = None
+    if comp.loop is not None and comp.controller is not None and comp.driver is not None:
+        loop = _loop(pipe, comp.controller, comp.driver)
+    return replace(comp, rig=rig, pipeline=pipe, loop=loop)
+
+
+def describe_source(c: Composition) -> dict[str, Any]:
+    """The source part of the status: kind, scenario or inputs, frame rate, image size."""
+    w, h = c.rig.left.size
+    out: dict[str, Any] = {"kind": c.config.source, "fps": c.fps, "width": w, "height": h}
+    if c.config.source == "sim":
+        out.update({"scenario": c.config.scenario, "seed": c.config.seed})
+    else:
+        out["inputs"] = list(c.config.inputs)
+    return out

@@ -1,0 +1,332 @@
+"""The runtime: one rig (`Composition`) run frame by frame in a worker thread, results published to
+subscribers (`Hub` of `FrameEvent`s), operator requests applied between frames.
+
+Real time: with `realtime`, frame k is due at t0 + k / fps. A frame that took too long makes the worker
+skip the frames it missed (the simulator jumps ahead, a file source reads past them), so the next frame
+processed is the newest one and no queue grows; skipped frames are counted. Requests from other threads
+(servo modes, go-to, jog, tracker settings, a new rig) are queued and run in the worker between frames;
+each returns a Future. A frame that raises is logged and counted, and the worker goes on.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import queue
+import threading
+import time
+from collections.abc import Callable
+from concurrent.futures import Future
+from dataclasses import dataclass, replace
+from typing import Any, TypeVar
+
+from tmeye.runtime.compose import Composition, compose, describe_source, rebuild_pipeline
+from tmeye.runtime.config import RuntimeConfig, TrackerTuning
+from tmeye.runtime.publish import Hub
+from tmeye.runtime.servo import ServoControl, ServoMode
+from tmeye.runtime.telemetry import detection_json, telemetry
+from tracker.closedloop import LoopStep
+from tracker.frames import StereoFrame
+from tracker.geometry import StereoRig
+from tracker.pipeline import FrameResult
+
+log = logging.getLogger("tmeye.runtime")
+R = TypeVar("R")
+
+
+@dataclass(frozen=True)
+class ServoState:
+    """The mount at a frame: mode, angles (deg) at capture, the operator's goal (deg), the fault and the
+    command sent this frame ({pan_deg, tilt_deg, reason} or None)."""
+
+    mode: str
+    pan_deg: float
+    tilt_deg: float
+    goal: tuple[float, float] | None
+    fault: str | None
+    command: dict[str, Any] | None = None
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"mode": self.mode, "pan_deg": round(self.pan_deg, 4), "tilt_deg": round(self.tilt_deg, 4),
+                "goal": None if self.goal is None else {"pan_deg": self.goal[0], "tilt_deg": self.goal[1]},
+                "command": self.command, "fault": self.fault}
+
+
+@dataclass(frozen=True)
+class FrameEvent:
+    """What the worker publishes per frame. frame_no: strictly increasing over the runtime's life (gaps
+    are skipped frames); captured_at / done_at: Unix time (s) of the capture and of the end of the
+    processing; telemetry: the JSON message of the frame."""
+
+    frame_no: int
+    frame: StereoFrame
+    result: FrameResult
+    step: LoopStep | None
+    servo: ServoState | None
+    captured_at: float
+    done_at: float
+    telemetry: dict[str, Any]
+
+
+class Runtime:
+    """Build with a config; `start()` composes the rig (ComposeError on a bad config) and starts the
+    worker; `stop()` ends it and closes the source and the servo."""
+
+    def __init__(self, config: RuntimeConfig, tuning: TrackerTuning | None = None):
+        self.config = config
+        self.tuning = tuning or TrackerTuning()
+        self.hub: Hub[FrameEvent] = Hub()
+        self.latest: FrameEvent | None = None
+        self.state = "created"
+        self.error: str | None = None
+        self.frames = self.skipped = self.frame_errors = 0
+        self.fps = 0.0
+        self.comp: Composition | None = None
+        self.servo: ServoControl | None = None
+        self._requests: queue.SimpleQueue[tuple[Callable[[], Any], Future[Any]]] = queue.SimpleQueue()
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._base = 0  # added to source frame indices (a rebuilt source starts again at 0)
+        self._last_t: float | None = None
+        self._last_done: float | None = None
+
+    # --- life cycle ----------------------------------------------------------------------------------
+    def start(self, rig: StereoRig | None = None) -> None:
+        self.state = "starting"
+        try:
+            self.comp = compose(self.config, self.tuning, rig)
+        except Exception as exc:
+            self.state, self.error = "failed", str(exc)
+            raise
+        if self.comp.controller is not None:
+            self.servo = ServoControl(self.comp.controller)
+        self._thread = threading.Thread(target=self._run, name="tmeye-runtime", daemon=True)
+        self.state = "running"
+        self._thread.start()
+
+    def stop(self, timeout: float = 3.0) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout)
+        if self.comp is not None:
+            self.comp.close()
+        self.hub.close()
+        if self.state == "running":
+            self.state = "stopped"
+
+    def join(self, timeout: float | None = None) -> None:
+        if self._thread is not None:
+            self._thread.join(timeout)
+
+    @property
+    def running(self) -> bool:
+        return self._thread is not None and self._thread.is_alive()
+
+    # --- requests (any thread) -----------------------------------------------------------------------
+    def submit(self, fn: Callable[[], R]) -> Future[R]:
+        """Run fn in the worker before the next frame; its result or exception comes in the Future."""
+        fut: Future[R] = Future()
+        if not self.running:
+            fut.set_exception(RuntimeError("the tracker runtime is not running"))
+            return fut
+        self._requests.put((fn, fut))
+        return fut
+
+    def set_tuning(self, tuning: TrackerTuning) -> Future[None]:
+        def apply() -> None:
+            assert self.comp is not None
+            _apply_tuning(self.comp, tuning)
+            self.tuning = tuning
+        return self.submit(apply)
+
+    def switch_rig(self, rig: StereoRig) -> Future[None]:
+        """Build a pipeline for `rig` (background learnt anew) off the worker, then swap it in."""
+        assert self.comp is not None
+        comp = self.comp
+        fut: Future[None] = Future()
+
+        def build() -> None:
+            try:
+                new = rebuild_pipeline(comp, rig, self.tuning)
+            except Exception as exc:
+                fut.set_exception(exc)
+                return
+            swap = self.submit(lambda: self._install(comp, new))
+            swap.add_done_callback(lambda f: fut.set_exception(e) if (e := f.exception()) else fut.set_result(None))
+
+        threading.Thread(target=build, name="tmeye-rig-switch", daemon=True).start()
+        return fut
+
+    def _install(self, comp: Composition, new: Composition) -> None:
+        """In the worker: a real source's new pipeline learns the background from the latest frame."""
+        if comp.sim is None:
+            if self.latest is None:
+                raise RuntimeError("no frame yet to learn the background from")
+            new.pipeline.learn_background(self.latest.frame)
+        comp.rig, comp.pipeline, comp.loop = new.rig, new.pipeline, new.loop
+
+    # --- status --------------------------------------------------------------------------------------
+    def status(self) -> dict[str, Any]:
+        ev = self.latest
+        faults: list[dict[str, str]] = []
+        if self.error:
+            faults.append({"kind": "runtime", "message": self.error})
+        if ev is not None and ev.servo is not None and ev.servo.fault:
+            faults.append({"kind": "servo", "message": ev.servo.fault})
+        servo = ev.servo.as_dict() if ev is not None and ev.servo is not None else None
+        return {"state": self.state, "frame": ev.frame_no if ev else None, "fps": round(self.fps, 2),
+                "frames_processed": self.frames, "skipped_frames": self.skipped, "frame_errors": self.frame_errors,
+                "source": describe_source(self.comp) if self.comp else {"kind": self.config.source},
+                "servo": servo, "subscribers": self.hub.subscribers, "faults": faults}
+
+    # --- the worker ----------------------------------------------------------------------------------
+    def _run(self) -> None:
+        assert self.comp is not None
+        period = 1.0 / self.comp.fps if self.config.realtime else 0.0
+        t0, k = time.monotonic(), 0
+        try:
+            while not self._stop.is_set():
+                self._apply_requests()
+                if not self._one_frame():
+                    break
+                if self.config.max_frames is not None and self.frames >= self.config.max_frames:
+                    break
+                if period:
+                    k += 1
+                    late = time.monotonic() - (t0 + k * period)
+                    if late < 0:
+                        self._stop.wait(-late)
+                    elif (behind := int(late / period)) > 0:
+                        self._skip(behind)
+                        k += behind
+        except Exception as exc:  # a bug: keep the message for the status, end cleanly
+            log.exception("runtime worker stopped")
+            self.state, self.error = "failed", f"worker stopped: {exc}"
+        finally:
+            self._fail_requests()
+            self.hub.close()  # subscribers see the end once they have read what is queued
+            if self.state == "running":
+                self.state = "ended" if not self._stop.is_set() else "stopped"
+
+    def _one_frame(self) -> bool:
+        comp = self.comp
+        assert comp is not None
+        captured_at = time.time()
+        frame = comp.source.read()
+        if frame is None:
+            log.info("source ended after %d frames", self.frames)
+            return False
+        if comp.config.source in ("usb", "rtsp"):  # live stamps are time.monotonic()
+            captured_at = time.time() - (time.monotonic() - frame.t)
+        try:
+            ev = self._process(frame, captured_at)
+        except Exception as exc:
+            self.frame_errors += 1
+            log.warning("frame %d failed: %s", frame.index, exc, exc_info=self.frame_errors == 1)
+            return True
+        self.latest = ev
+        self.hub.publish(ev)
+        return True
+
+    def _process(self, frame: StereoFrame, captured_at: float) -> FrameEvent:
+        comp = self.comp
+        assert comp is not None
+        dt = 0.0 if self._last_t is None else max(frame.t - self._last_t, 0.0)
+        self._last_t = frame.t
+        if self.servo is not None:
+            self.servo.tick(frame.t, dt)
+        step = comp.loop.step(frame) if comp.loop is not None else None
+        res = step.result if step is not None else comp.pipeline.step(frame)
+        now = time.monotonic()
+        if self._last_done is not None and now > self._last_done:
+            rate = 1.0 / (now - self._last_done)  # frames processed per wall-clock second
+            self.fps = rate if self.fps == 0 else 0.9 * self.fps + 0.1 * rate
+        self._last_done = now
+        self.frames += 1
+        servo = self._servo_state(step)
+        frame_no = self._base + frame.index
+        tm = telemetry(res, frame, self.fps, frame_no)
+        tm["captured_at"] = round(captured_at, 6)
+        tm["servo"] = None if servo is None else servo.as_dict()
+        tm["detections"] = [detection_json(d) for d in res.detections]
+        if step is not None:
+            tm["latency_ms"] = round(step.latency_ms, 3)
+        return FrameEvent(frame_no, frame, res, step, servo, captured_at, time.time(), tm)
+
+    def _servo_state(self, step: LoopStep | None) -> ServoState | None:
+        if step is None or self.servo is None:
+            return None
+        g = step.frame.gimbal
+        pan, tilt = (g.pan_deg, g.tilt_deg) if g is not None else (math.nan, math.nan)
+        return ServoState(str(self.servo.mode), pan, tilt, self.servo.goal, step.fault,
+                          step.servo_json()["command"])  # type: ignore[arg-type]
+
+    def _skip(self, n: int) -> None:
+        comp = self.comp
+        assert comp is not None
+        self.skipped += n
+        sim = comp.sim
+        if sim is not None:
+            if hasattr(sim, "skip"):
+                sim.skip(n)
+            elif sim.scenario.frames is None:
+                sim.index += n
+            else:
+                sim.index = min(sim.index + n, sim.scenario.frames)
+        elif comp.config.source == "files":
+            for _ in range(n):
+                if comp.source.read() is None:
+                    break
+
+    def _apply_requests(self) -> None:
+        while True:
+            try:
+                fn, fut = self._requests.get_nowait()
+            except queue.Empty:
+                return
+            if not fut.set_running_or_notify_cancel():
+                continue
+            try:
+                fut.set_result(fn())
+            except Exception as exc:
+                fut.set_exception(exc)
+
+    def _fail_requests(self) -> None:
+        while True:
+            try:
+                _, fut = self._requests.get_nowait()
+            except queue.Empty:
+                return
+            if fut.set_running_or_notify_cancel():
+                fut.set_exception(RuntimeError("the tracker runtime stopped"))
+
+    # --- servo requests ------------------------------------------------------------------------------
+    def servo_mode(self, mode: ServoMode) -> Future[None]:
+        return self.submit(lambda: self._need_servo().set_mode(mode))
+
+    def servo_goto(self, pan_deg: float, tilt_deg: float) -> Future[None]:
+        return self.submit(lambda: self._need_servo().goto(pan_deg, tilt_deg))
+
+    def servo_jog(self, pan_dps: float, tilt_dps: float, duration_s: float) -> Future[None]:
+        return self.submit(lambda: self._need_servo().jog(pan_dps, tilt_dps, duration_s))
+
+    def _need_servo(self) -> ServoControl:
+        if self.servo is None:
+            raise NoServoError("no servo is configured (start with --servo sim or a driver URL)")
+        return self.servo
+
+
+class NoServoError(RuntimeError):
+    """A servo request while the runtime drives no mount."""
+
+
+def _apply_tuning(comp: Composition, tuning: TrackerTuning) -> None:
+    pipe = comp.pipeline
+    det = replace(tuning.detector, fps=pipe.subtractor.cfg.fps, stride=pipe.subtractor.cfg.stride)
+    pipe.subtractor.reconfigure(det)
+    pipe.tracker.cfg = tuning.tracks
+    if comp.controller is not None:
+        old = comp.controller.config
+        comp.controller.config = replace(tuning.aim, frame_width_px=old.frame_width_px, focal_px=old.focal_px)
+
+
