@@ -13,7 +13,7 @@ from tmeye.errors import UserError
 __all__ = ["UserError", "build_parser", "main"]
 
 # Sub-command modules, each with register(subparsers) setting `func` on its parser.
-COMMANDS = ("track", "eval", "bench", "calibrate")
+COMMANDS = ("track", "eval", "bench", "calibrate", "serve", "user")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -12,7 +12,7 @@ import logging
 import threading
 from collections import deque
 from collections.abc import Callable
-from typing import Generic, TypeVar
+from typing import Any, Generic, TypeVar
 
 T = TypeVar("T")
 log = logging.getLogger("tmeye.runtime")
@@ -22,7 +22,7 @@ class Subscription(Generic[T]):
     """A bounded drop-oldest queue. `put` never blocks; `get(timeout)` waits in a consumer thread;
     `drain()` takes everything without waiting (asyncio consumers, after their notify)."""
 
-    def __init__(self, maxsize: int, notify: Callable[[], None] | None = None, name: str = ""):
+    def __init__(self, maxsize: int, notify: Callable[[], Any] | None = None, name: str = ""):
         if maxsize < 1:
             raise ValueError(f"a subscription holds at least one item, got maxsize={maxsize}")
         self.name = name
@@ -75,7 +75,7 @@ class Hub(Generic[T]):
         self._subs: list[Subscription[T]] = []
         self._lock = threading.Lock()
 
-    def subscribe(self, maxsize: int = 4, notify: Callable[[], None] | None = None,
+    def subscribe(self, maxsize: int = 4, notify: Callable[[], Any] | None = None,
                   name: str = "") -> Subscription[T]:
         sub: Subscription[T] = Subscription(maxsize, notify, name)
         with self._lock:

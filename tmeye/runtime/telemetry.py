@@ -7,6 +7,8 @@ from __future__ import annotations
 import math
 from typing import Any
 
+import numpy as np
+
 from tracker.frames import StereoFrame
 from tracker.pipeline import Detection, FrameResult
 
@@ -24,13 +26,25 @@ def primary_fields(det: Detection) -> dict[str, Any]:
             "sigma_phi_deg": _r(math.degrees(loc.sigma_phi), 5)}
 
 
-def detection_json(det: Detection) -> dict[str, Any]:
+def metric_size(det: Detection, focal_px: float) -> tuple[float, float]:
+    """(width, height) in metres of a detection: its mask's extent in pixels times depth z over f."""
+    m = det.blob.mask
+    cols, rows = np.flatnonzero(m.any(axis=0)), np.flatnonzero(m.any(axis=1))
+    if cols.size == 0:
+        return 0.0, 0.0
+    z = float(det.loc.rig[2])
+    return (float(cols[-1] - cols[0] + 1) * z / focal_px, float(rows[-1] - rows[0] + 1) * z / focal_px)
+
+
+def detection_json(det: Detection, focal_px: float) -> dict[str, Any]:
     """A detection for the overlay: track id, left-image box (x0, y0, x1, y1 px), centroid (raw px),
-    area (px), disparity (px) and its 3-D position."""
+    area (px), disparity (px), metric size (m) and its 3-D position."""
     b = det.blob
+    w, h = metric_size(det, focal_px)
     out: dict[str, Any] = {"track_id": det.track_id, "box": [int(v) for v in b.box],
                            "centroid": [_r(b.centroid_raw[0], 2), _r(b.centroid_raw[1], 2)],
-                           "area_px": int(b.area), "disparity_px": _r(b.disparity, 3)}
+                           "area_px": int(b.area), "disparity_px": _r(b.disparity, 3),
+                           "size_m": [_r(w, 3), _r(h, 3)]}
     out.update(primary_fields(det))
     return out
 

@@ -10,6 +10,7 @@ each returns a Future. A frame that raises is logged and counted, and the worker
 
 from __future__ import annotations
 
+import json
 import logging
 import math
 import queue
@@ -18,6 +19,7 @@ import time
 from collections.abc import Callable
 from concurrent.futures import Future
 from dataclasses import dataclass, replace
+from functools import cached_property
 from typing import Any, TypeVar
 
 from tmeye.runtime.compose import Composition, compose, describe_source, rebuild_pipeline
@@ -66,6 +68,12 @@ class FrameEvent:
     captured_at: float
     done_at: float
     telemetry: dict[str, Any]
+    generation: int = 0  # incremented when a new pipeline (rig) is swapped in: track ids restart
+
+    @cached_property
+    def telemetry_json(self) -> str:
+        """The telemetry as JSON text, made once however many clients send it."""
+        return json.dumps(self.telemetry, separators=(",", ":"))
 
 
 class Runtime:
@@ -89,6 +97,7 @@ class Runtime:
         self._base = 0  # added to source frame indices (a rebuilt source starts again at 0)
         self._last_t: float | None = None
         self._last_done: float | None = None
+        self.generation = 0
 
     # --- life cycle ----------------------------------------------------------------------------------
     def start(self, rig: StereoRig | None = None) -> None:
@@ -164,6 +173,7 @@ class Runtime:
                 raise RuntimeError("no frame yet to learn the background from")
             new.pipeline.learn_background(self.latest.frame)
         comp.rig, comp.pipeline, comp.loop = new.rig, new.pipeline, new.loop
+        self.generation += 1
 
     # --- status --------------------------------------------------------------------------------------
     def status(self) -> dict[str, Any]:
@@ -248,10 +258,10 @@ class Runtime:
         tm = telemetry(res, frame, self.fps, frame_no)
         tm["captured_at"] = round(captured_at, 6)
         tm["servo"] = None if servo is None else servo.as_dict()
-        tm["detections"] = [detection_json(d) for d in res.detections]
+        tm["detections"] = [detection_json(d, comp.pipeline.rect.f) for d in res.detections]
         if step is not None:
             tm["latency_ms"] = round(step.latency_ms, 3)
-        return FrameEvent(frame_no, frame, res, step, servo, captured_at, time.time(), tm)
+        return FrameEvent(frame_no, frame, res, step, servo, captured_at, time.time(), tm, self.generation)
 
     def _servo_state(self, step: LoopStep | None) -> ServoState | None:
         if step is None or self.servo is None:

@@ -1,0 +1,30 @@
+"""The collaborators the routers need, built by create_app's lifespan and stored on `app.state.ctx`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+from sqlalchemy import Engine
+from sqlalchemy.orm import Session, sessionmaker
+
+from server.security import LoginThrottle
+from server.settings import Settings
+from tmeye.runtime import Runtime
+
+if TYPE_CHECKING:
+    from server.services.calibration import CalibrationJobs
+    from server.services.events import EventBus
+
+
+@dataclass
+class AppContext:
+    settings: Settings
+    engine: Engine
+    sessions: sessionmaker[Session]
+    key: bytes
+    throttle: LoginThrottle
+    runtime: Runtime
+    events: EventBus
+    calibrations: CalibrationJobs
+    extras: dict[str, object] = field(default_factory=dict)

@@ -1,0 +1,1 @@
+"""Thin routers: parse, call a service, answer. One module per area."""

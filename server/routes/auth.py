@@ -1,0 +1,43 @@
+"""Login (OAuth2 password form; bearer token plus an HttpOnly SameSite=Strict cookie) and logout."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import APIRouter, Depends, HTTPException, Response
+from fastapi.security import OAuth2PasswordRequestForm
+
+from server.deps import COOKIE, CSRF_COOKIE, Address, CtxDep, DbDep, PrincipalDep
+from server.schemas import LoginAnswer, Message
+from server.services import auth as auth_service
+
+router = APIRouter(prefix="/api/auth", tags=["auth"])
+
+
+@router.post("/login", response_model=LoginAnswer, summary="Log in with username and password",
+             responses={401: {"model": Message}, 429: {"model": Message, "description": "too many failures"}})
+def login(form: Annotated[OAuth2PasswordRequestForm, Depends()], response: Response, ctx: CtxDep, db: DbDep,
+          address: Address) -> LoginAnswer:
+    wait = ctx.throttle.retry_after(form.username, address)
+    if wait:
+        raise HTTPException(429, f"too many failed logins: try again in {wait} s", headers={"Retry-After": str(wait)})
+    answer = auth_service.login(db, ctx, form.username, form.password, address)
+    if answer is None:
+        ctx.throttle.failed(form.username, address)
+        raise HTTPException(401, "wrong username or password", headers={"WWW-Authenticate": "Bearer"})
+    ctx.throttle.succeeded(form.username)
+    secure = ctx.settings.cookie_secure
+    response.set_cookie(COOKIE, answer.access_token, max_age=answer.expires_in, httponly=True, samesite="strict",
+                        secure=secure, path="/")
+    response.set_cookie(CSRF_COOKIE, answer.csrf_token, max_age=answer.expires_in, httponly=False,
+                        samesite="strict", secure=secure, path="/")
+    return answer
+
+
+@router.post("/logout", status_code=204, summary="End this session: its token stops working at once")
+def logout(p: PrincipalDep, response: Response, db: DbDep, address: Address) -> Response:
+    auth_service.logout(db, p.user, p.session_id, address)
+    response.status_code = 204
+    response.delete_cookie(COOKIE, path="/")
+    response.delete_cookie(CSRF_COOKIE, path="/")
+    return response

@@ -1,0 +1,28 @@
+"""Tracks recorded by the track writer: list by time, one with its trajectory."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Query
+
+from server.deps import DbDep, Viewer
+from server.schemas import Message, TrackDetail, TrackOut
+from server.services import tracks as track_service
+
+router = APIRouter(prefix="/api/tracks", tags=["tracks"])
+
+
+@router.get("", response_model=list[TrackOut], summary="Tracks seen between start and end (Unix s), newest first")
+def list_tracks(_p: Viewer, db: DbDep, start: Annotated[float | None, Query(description="Unix s")] = None,
+                end: Annotated[float | None, Query(description="Unix s")] = None,
+                limit: Annotated[int, Query(ge=1, le=10000)] = 500) -> list[Any]:
+    return track_service.list_tracks(db, start, end, limit)
+
+
+@router.get("/{track_id}", response_model=TrackDetail, responses={404: {"model": Message}},
+            summary="One track with its trajectory (x, y, z m; r m; θ, φ deg)")
+def get_track(track_id: int, _p: Viewer, db: DbDep) -> TrackDetail:
+    tr, pts = track_service.get_track(db, track_id)
+    return TrackDetail.model_validate({**TrackOut.model_validate(tr).model_dump(), "trajectory": pts},
+                                      from_attributes=True)

@@ -1,0 +1,56 @@
+"""Users (admin) and the audit log (admin)."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Query
+
+from server.deps import Address, Admin, DbDep
+from server.schemas import AuditOut, Message, UserIn, UserOut, UserPatch
+from server.services import audit
+from server.services import users as user_service
+
+router = APIRouter(prefix="/api", tags=["users"])
+
+
+@router.get("/users", response_model=list[UserOut], summary="All users")
+def list_users(_p: Admin, db: DbDep) -> list[Any]:
+    return user_service.list_users(db)
+
+
+@router.post("/users", response_model=UserOut, status_code=201, responses={409: {"model": Message}},
+             summary="Create a user (password 12 to 128 characters)")
+def create_user(body: UserIn, p: Admin, db: DbDep, addr: Address) -> Any:
+    user = user_service.create_user(db, body.username, body.password, body.role)
+    audit.record(db, p.user, addr, "user.create", body.username, {"role": body.role})
+    db.commit()
+    return user
+
+
+@router.patch("/users/{user_id}", response_model=UserOut, responses={404: {"model": Message}, 409: {"model": Message}},
+              summary="Change password (ends the user's sessions), role or disabled")
+def patch_user(user_id: int, body: UserPatch, p: Admin, db: DbDep, addr: Address) -> Any:
+    user = user_service.update_user(db, user_service.get_user(db, user_id), body.password, body.role, body.disabled)
+    audit.record(db, p.user, addr, "user.update", user.username,
+                 {k: v for k, v in body.model_dump(exclude_none=True).items() if k != "password"}
+                 | ({"password": "changed"} if body.password else {}))
+    db.commit()
+    return user
+
+
+@router.delete("/users/{user_id}", status_code=204, responses={404: {"model": Message}, 409: {"model": Message}},
+               summary="Delete a user")
+def delete_user(user_id: int, p: Admin, db: DbDep, addr: Address) -> None:
+    user = user_service.get_user(db, user_id)
+    user_service.delete_user(db, user)
+    audit.record(db, p.user, addr, "user.delete", user.username)
+    db.commit()
+
+
+@router.get("/audit", response_model=list[AuditOut], summary="Audit log, newest first")
+def list_audit(_p: Admin, db: DbDep, start: Annotated[float | None, Query(description="Unix s")] = None,
+               end: Annotated[float | None, Query(description="Unix s")] = None,
+               action: Annotated[str | None, Query(max_length=64)] = None,
+               limit: Annotated[int, Query(ge=1, le=10000)] = 500) -> list[Any]:
+    return audit.list_entries(db, start, end, action, limit)

@@ -1,0 +1,264 @@
+"""Pydantic models of every request and response (the OpenAPI document is built from them). Angles in
+degrees, lengths in metres, times in Unix seconds unless named otherwise."""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+Role = Literal["viewer", "operator", "admin"]
+
+
+class Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class Message(BaseModel):
+    detail: str
+
+
+class Health(BaseModel):
+    status: Literal["ok", "starting", "failed", "stopped"]
+    runtime: str = Field(description="runtime state: starting, running, ended, failed, stopped")
+    version: str
+    frame: int | None = None
+
+    model_config = ConfigDict(json_schema_extra={"examples": [{"status": "ok", "runtime": "running",
+                                                                "version": "0.1.0", "frame": 1234}]})
+
+
+class LoginAnswer(BaseModel):
+    access_token: str
+    token_type: Literal["bearer"] = "bearer"
+    role: Role
+    expires_in: int = Field(description="seconds until the token expires")
+    csrf_token: str = Field(description="send as X-CSRF-Token with cookie-authenticated unsafe requests")
+
+
+class Fault(BaseModel):
+    kind: str
+    message: str
+
+
+class ServoStatus(BaseModel):
+    mode: Literal["auto", "manual", "hold", "home"] | None = None
+    pan_deg: float | None = None
+    tilt_deg: float | None = None
+    fault: str | None = None
+    goal: dict[str, float] | None = None
+    command: dict[str, Any] | None = None
+    configured: bool = True
+    limits: dict[str, list[float]] | None = None
+
+
+class Status(BaseModel):
+    state: str
+    frame: int | None
+    fps: float
+    skipped_frames: int
+    frames_processed: int
+    frame_errors: int
+    source: dict[str, Any]
+    servo: ServoStatus
+    faults: list[Fault]
+    subscribers: int
+
+
+class Detection(BaseModel):
+    track_id: int
+    box: list[int] = Field(description="left-image box x0, y0, x1, y1 (px)")
+    centroid: list[float] = Field(description="eq. (10) centroid in the left image (px)")
+    area_px: int
+    disparity_px: float
+    size_m: list[float] | None = Field(None, description="width, height (m)")
+    x: float
+    y: float
+    z: float
+    r: float
+    theta_deg: float
+    phi_deg: float
+    sigma_r: float
+    sigma_theta_deg: float
+    sigma_phi_deg: float
+
+
+class Telemetry(BaseModel):
+    """One frame: the fields of `tmeye track --json`, the capture time, the servo state, every detection."""
+
+    frame: int
+    t: float
+    offset_s: float
+    detected: bool
+    track_id: int | None
+    objects: int
+    fps: float
+    step_ms: float
+    captured_at: float
+    x: float | None = None
+    y: float | None = None
+    z: float | None = None
+    r: float | None = None
+    theta_deg: float | None = None
+    phi_deg: float | None = None
+    sigma_r: float | None = None
+    sigma_theta_deg: float | None = None
+    sigma_phi_deg: float | None = None
+    latency_ms: float | None = None
+    servo: ServoStatus | None = None
+    detections: list[Detection] = []
+
+
+class ModeRequest(Strict):
+    mode: Literal["auto", "manual", "hold", "home"]
+
+
+class GotoRequest(Strict):
+    pan_deg: float = Field(ge=-360, le=360, examples=[12.5])
+    tilt_deg: float = Field(ge=-90, le=90, examples=[-3.0])
+
+
+class JogRequest(Strict):
+    pan_dps: float = Field(ge=-180, le=180, description="pan rate (deg/s)", examples=[10.0])
+    tilt_dps: float = Field(ge=-180, le=180, description="tilt rate (deg/s)", examples=[0.0])
+    duration_s: float = Field(gt=0, le=10, description="how long to jog (s)", examples=[0.5])
+
+
+class PresetIn(Strict):
+    name: str = Field(min_length=1, max_length=64, pattern=r"^[\w .-]+$", examples=["gate"])
+    pan_deg: float | None = Field(None, ge=-360, le=360, description="default: the mount's current angle")
+    tilt_deg: float | None = Field(None, ge=-90, le=90, description="default: the mount's current angle")
+
+
+class Preset(BaseModel):
+    model_config = ConfigDict(from_attributes=True)
+
+    id: int
+    name: str
+    pan_deg: float
+    tilt_deg: float
+    created_at: float
+
+
+class TrackPointOut(BaseModel):
+    model_config = ConfigDict(from_attributes=True)
+
+    t: float
+    x: float
+    y: float
+    z: float
+    r: float
+    theta_deg: float
+    phi_deg: float
+
+
+class TrackOut(BaseModel):
+    model_config = ConfigDict(from_attributes=True)
+
+    id: int
+    run_id: str
+    track_no: int
+    first_seen: float
+    last_seen: float
+    detections: int
+    peak_speed_mps: float
+    width_m: float | None
+    height_m: float | None
+    min_range_m: float | None
+
+
+class TrackDetail(TrackOut):
+    trajectory: list[TrackPointOut]
+
+
+class DetectorSettings(Strict):
+    epsilon: int = Field(12, ge=1, le=254, description="eq. (9) threshold ε (grey levels)")
+    min_area_px: int = Field(16, ge=1, le=100000, description="smallest object (px)")
+    absorb_s: float = Field(20.0, gt=0, le=3600, description="a stopped object merges into the background after")
+    margin_px: int = Field(6, ge=0, le=64, description="box padding (px)")
+    min_depth_gap: float = Field(0.04, ge=0, le=1, description="object disparity must exceed background's by")
+    min_disparity_gap_px: float = Field(0.5, ge=0, le=20, description="plus this many pixels")
+    moving_min_cells: int = Field(3, ge=1, le=100, description="candidate cells needed while the mount moves")
+
+
+class TracksSettings(Strict):
+    gate_px: float = Field(40.0, gt=0, le=1000, description="association gate (px)")
+    gate_growth_px: float = Field(4.0, ge=0, le=100, description="gate growth per missed frame (px)")
+    confirm_hits: int = Field(2, ge=1, le=30, description="detections before a track is confirmed")
+    max_missed: int = Field(60, ge=1, le=3000, description="frames a track coasts before it is dropped")
+
+
+class AimSettings(Strict):
+    max_rate_deg_s: float = Field(180.0, gt=0, le=1000)
+    max_accel_deg_s2: float = Field(1200.0, gt=0, le=20000)
+    deadband_frac: float = Field(0.02, ge=0, le=0.5, description="deadband as a fraction of the frame width")
+    loss_timeout_s: float = Field(1.5, ge=0, le=600, description="home after the target is lost this long")
+    home_pan_deg: float = Field(0.0, ge=-170, le=170)
+    home_tilt_deg: float = Field(0.0, ge=-30, le=80)
+    centroid_gain: float = Field(1.0, ge=0, le=2)
+    correction_tau_s: float = Field(0.5, gt=0, le=10)
+    max_correction_deg: float = Field(5.0, ge=0, le=45)
+
+
+class TrackerSettings(Strict):
+    detector: DetectorSettings
+    tracks: TracksSettings
+    aim: AimSettings
+
+
+class TrackerSettingsPatch(Strict):
+    """Any subset of the settings; the rest keep their values."""
+
+    detector: dict[str, Any] | None = Field(None, examples=[{"epsilon": 14}])
+    tracks: dict[str, Any] | None = None
+    aim: dict[str, Any] | None = None
+
+
+class CalibrationOut(BaseModel):
+    id: int
+    created_at: float
+    created_by: int | None
+    status: Literal["running", "done", "failed"]
+    board: str = Field(description="inner corners COLSxROWS")
+    square_m: float
+    images: int = Field(description="image pairs uploaded")
+    image_hashes: list[list[str]] = Field(description="SHA-256 of each left, right image")
+    error: str | None
+    finished_at: float | None
+    active: bool
+    report: dict[str, Any] | None = None
+
+
+class UserIn(Strict):
+    username: str = Field(min_length=1, max_length=64, pattern=r"^[A-Za-z0-9_.@-]+$", examples=["alice"])
+    password: str = Field(min_length=12, max_length=128)
+    role: Role
+
+
+class UserPatch(Strict):
+    password: str | None = Field(None, min_length=12, max_length=128)
+    role: Role | None = None
+    disabled: bool | None = None
+
+
+class UserOut(BaseModel):
+    model_config = ConfigDict(from_attributes=True)
+
+    id: int
+    username: str
+    role: Role
+    created_at: float
+    disabled: bool
+
+
+class AuditOut(BaseModel):
+    model_config = ConfigDict(from_attributes=True)
+
+    id: int
+    at: float
+    user_id: int | None
+    username: str | None
+    address: str | None
+    action: str
+    target: str | None
+    detail: dict[str, Any] | None

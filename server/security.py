@@ -1,0 +1,126 @@
+"""Passwords, session tokens and login throttling (no I/O here).
+
+- Passwords: argon2id (argon2-cffi) at OWASP's first recommended setting, m = 19 MiB, t = 2, p = 1;
+  12 to 128 characters.
+- Tokens: `v1.<session id>.<expiry>.<HMAC-SHA256>` signed with the server's secret key; a token is valid
+  while its signature holds, it has not expired and its session row is not revoked (checked by the caller).
+- CSRF: a cookie-authenticated unsafe request must carry `X-CSRF-Token` equal to HMAC(key, "csrf" + session).
+- Throttling: a sliding window of failed logins per username and per address.
+"""
+
+from __future__ import annotations
+
+import base64
+import hashlib
+import hmac
+import secrets
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from argon2 import PasswordHasher
+from argon2.exceptions import InvalidHashError, VerificationError, VerifyMismatchError
+
+MIN_PASSWORD, MAX_PASSWORD = 12, 128
+_hasher = PasswordHasher(time_cost=2, memory_cost=19 * 1024, parallelism=1)
+
+
+def check_password_rules(password: str) -> None:
+    if not MIN_PASSWORD <= len(password) <= MAX_PASSWORD:
+        raise ValueError(f"password must be {MIN_PASSWORD} to {MAX_PASSWORD} characters long")
+
+
+def hash_password(password: str) -> str:
+    check_password_rules(password)
+    return _hasher.hash(password)
+
+
+def verify_password(password_hash: str, password: str) -> bool:
+    try:
+        return _hasher.verify(password_hash, password)
+    except (VerifyMismatchError, VerificationError, InvalidHashError):
+        return False
+
+
+def dummy_verify() -> None:
+    """Spend the time of one verification (a login for an unknown user must not answer faster)."""
+    verify_password(_DUMMY, "not the password at all")
+
+
+_DUMMY = _hasher.hash("a dummy password for timing")
+
+
+def new_secret() -> bytes:
+    return secrets.token_bytes(32)
+
+
+def new_session_id() -> str:
+    return secrets.token_urlsafe(24)
+
+
+def _mac(key: bytes, msg: str) -> str:
+    d = hmac.new(key, msg.encode(), hashlib.sha256).digest()
+    return base64.urlsafe_b64encode(d).rstrip(b"=").decode()
+
+
+def make_token(key: bytes, session_id: str, expires_at: float) -> str:
+    body = f"v1.{session_id}.{int(expires_at)}"
+    return f"{body}.{_mac(key, body)}"
+
+
+@dataclass(frozen=True)
+class TokenClaims:
+    session_id: str
+    expires_at: float
+
+
+def read_token(key: bytes, token: str, now: float | None = None) -> TokenClaims | None:
+    """The token's claims if its signature is right and it has not expired; None otherwise."""
+    parts = token.split(".")
+    if len(parts) != 4 or parts[0] != "v1" or not parts[2].isdigit():
+        return None
+    body = ".".join(parts[:3])
+    if not hmac.compare_digest(_mac(key, body), parts[3]):
+        return None
+    exp = float(parts[2])
+    if exp <= (time.time() if now is None else now):
+        return None
+    return TokenClaims(parts[1], exp)
+
+
+def csrf_token(key: bytes, session_id: str) -> str:
+    return _mac(key, f"csrf.{session_id}")
+
+
+class LoginThrottle:
+    """Failed logins within `window_s`: more than `per_user` for one username or `per_address` from one
+    address makes `retry_after` return the seconds to wait (0 when allowed). Thread-safe enough for one
+    event loop (no awaits inside)."""
+
+    def __init__(self, per_user: int, per_address: int, window_s: float, clock: Callable[[], float] = time.monotonic):
+        self.per_user, self.per_address, self.window_s, self.clock = per_user, per_address, window_s, clock
+        self._fails: dict[tuple[str, str], deque[float]] = {}
+
+    def _recent(self, key: tuple[str, str]) -> deque[float]:
+        q = self._fails.setdefault(key, deque())
+        cutoff = self.clock() - self.window_s
+        while q and q[0] <= cutoff:
+            q.popleft()
+        return q
+
+    def retry_after(self, username: str, address: str) -> int:
+        waits = []
+        for key, limit in ((("user", username.lower()), self.per_user), (("addr", address), self.per_address)):
+            q = self._recent(key)
+            if len(q) >= limit:
+                waits.append(q[-limit] + self.window_s - self.clock())
+        return max(1, int(max(waits)) + 1) if waits else 0
+
+    def failed(self, username: str, address: str) -> None:
+        now = self.clock()
+        self._recent(("user", username.lower())).append(now)
+        self._recent(("addr", address)).append(now)
+
+    def succeeded(self, username: str) -> None:
+        self._fails.pop(("user", username.lower()), None)

@@ -1,0 +1,1 @@
+"""Services own the database work; routers call them (from FastAPI's thread pool: sync sessions)."""

@@ -1,0 +1,144 @@
+"""Servo control and live tracker settings: requests to the runtime (applied by its worker between
+frames), presets and settings changes in the database, every action audited."""
+
+from __future__ import annotations
+
+import time
+from concurrent.futures import Future
+from concurrent.futures import TimeoutError as FutureTimeout
+from typing import Any, TypeVar
+
+from sqlalchemy import select
+from sqlalchemy.orm import Session
+
+from server.db.models import ServoPreset, SettingsChange, User
+from server.services import audit
+from server.services.errors import Conflict, Invalid, NotFound
+from tmeye.runtime import NoServoError, Runtime, ServoMode, ServoRequestError, TrackerTuning
+
+T = TypeVar("T")
+REQUEST_TIMEOUT_S = 2.0
+
+
+class Unavailable(RuntimeError):
+    """503: the runtime cannot take the request now."""
+
+
+def wait(fut: Future[T]) -> T:
+    """The request's result; service errors for a missing servo, bad angles or a stopped runtime."""
+    try:
+        return fut.result(timeout=REQUEST_TIMEOUT_S)
+    except NoServoError as exc:
+        raise Conflict(str(exc)) from None
+    except ServoRequestError as exc:
+        raise Invalid(str(exc)) from None
+    except FutureTimeout:
+        raise Unavailable("the tracker did not take the request in time") from None
+    except RuntimeError as exc:
+        raise Unavailable(str(exc)) from None
+
+
+def servo_state(rt: Runtime) -> dict[str, Any]:
+    ev = rt.latest
+    if rt.servo is None:
+        return {"configured": False}
+    out: dict[str, Any] = {"mode": str(rt.servo.mode)}
+    if ev is not None and ev.servo is not None:
+        out = ev.servo.as_dict()
+    pan, tilt = rt.servo.limits
+    out.update(configured=True,
+               limits={"pan_deg": [pan.min_deg, pan.max_deg], "tilt_deg": [tilt.min_deg, tilt.max_deg]})
+    return out
+
+
+def set_mode(db: Session, rt: Runtime, user: User, address: str, mode: str) -> dict[str, Any]:
+    wait(rt.servo_mode(ServoMode(mode)))
+    audit.record(db, user, address, "servo.mode", mode)
+    db.commit()
+    return servo_state(rt)
+
+
+def goto(db: Session, rt: Runtime, user: User, address: str, pan_deg: float, tilt_deg: float,
+         action: str = "servo.goto", target: str | None = None) -> dict[str, Any]:
+    wait(rt.servo_goto(pan_deg, tilt_deg))
+    audit.record(db, user, address, action, target, {"pan_deg": pan_deg, "tilt_deg": tilt_deg})
+    db.commit()
+    return servo_state(rt)
+
+
+def jog(db: Session, rt: Runtime, user: User, address: str, pan_dps: float, tilt_dps: float,
+        duration_s: float) -> dict[str, Any]:
+    wait(rt.servo_jog(pan_dps, tilt_dps, duration_s))
+    audit.record(db, user, address, "servo.jog", None,
+                 {"pan_dps": pan_dps, "tilt_dps": tilt_dps, "duration_s": duration_s})
+    db.commit()
+    return servo_state(rt)
+
+
+def list_presets(db: Session) -> list[ServoPreset]:
+    return list(db.scalars(select(ServoPreset).order_by(ServoPreset.name)))
+
+
+def get_preset(db: Session, preset_id: int) -> ServoPreset:
+    p = db.get(ServoPreset, preset_id)
+    if p is None:
+        raise NotFound(f"no preset with id {preset_id}")
+    return p
+
+
+def create_preset(db: Session, rt: Runtime, user: User, address: str, name: str, pan: float | None,
+                  tilt: float | None) -> ServoPreset:
+    if db.scalar(select(ServoPreset).where(ServoPreset.name == name)) is not None:
+        raise Conflict(f"a preset named {name!r} already exists")
+    if pan is None or tilt is None:
+        st = servo_state(rt)
+        if not st.get("configured") or st.get("pan_deg") is None:
+            raise Conflict("no servo position to store: give pan_deg and tilt_deg")
+        pan = st["pan_deg"] if pan is None else pan
+        tilt = st["tilt_deg"] if tilt is None else tilt
+    assert pan is not None and tilt is not None
+    if rt.servo is not None:
+        from tmeye.runtime.servo import check_angles
+
+        try:
+            check_angles(pan, tilt, *rt.servo.limits)
+        except ServoRequestError as exc:
+            raise Invalid(str(exc)) from None
+    p = ServoPreset(name=name, pan_deg=pan, tilt_deg=tilt, created_at=time.time(), created_by=user.id)
+    db.add(p)
+    audit.record(db, user, address, "preset.create", name, {"pan_deg": pan, "tilt_deg": tilt})
+    db.commit()
+    return p
+
+
+def delete_preset(db: Session, user: User, address: str, preset_id: int) -> None:
+    p = get_preset(db, preset_id)
+    db.delete(p)
+    audit.record(db, user, address, "preset.delete", p.name)
+    db.commit()
+
+
+def tuning_from_dict(base: TrackerTuning, d: dict[str, dict[str, Any]]) -> TrackerTuning:
+    try:
+        return base.updated(d)
+    except (ValueError, TypeError) as exc:
+        raise Invalid(str(exc)) from None
+
+
+def saved_tuning(db: Session) -> dict[str, dict[str, Any]] | None:
+    row = db.scalar(select(SettingsChange).where(SettingsChange.section == "tracker")
+                    .order_by(SettingsChange.id.desc()).limit(1))
+    return None if row is None else row.after
+
+
+def update_tuning(db: Session, rt: Runtime, user: User, address: str, new: dict[str, dict[str, Any]]
+                  ) -> dict[str, dict[str, Any]]:
+    before = rt.tuning.as_dict()
+    tuning = tuning_from_dict(rt.tuning, new)
+    wait(rt.set_tuning(tuning))
+    after = tuning.as_dict()
+    db.add(SettingsChange(at=time.time(), user_id=user.id, section="tracker", before=before, after=after))
+    changed = {s: {k: v for k, v in after[s].items() if before[s][k] != v} for s in after}
+    audit.record(db, user, address, "tracker.config", None, {s: c for s, c in changed.items() if c})
+    db.commit()
+    return after

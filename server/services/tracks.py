@@ -1,0 +1,166 @@
+"""Tracks: `TrackBook` folds each frame's detections into per-track summaries and trajectory samples
+(pure, no I/O); `TrackWriter` runs it on the runtime's published frames and commits in batches from a
+thread (never per frame, never on the event loop); the queries serve /api/tracks."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+from sqlalchemy import select
+from sqlalchemy.orm import Session, sessionmaker
+
+from server.db.models import Track, TrackPoint
+from server.services.errors import NotFound
+from tmeye.runtime import FrameEvent, Runtime
+
+log = logging.getLogger("tmeye.tracks")
+
+
+@dataclass
+class TrackSummary:
+    """A track as seen so far. Times Unix s; speed m/s; size m (median-free: the latest confirmed)."""
+
+    generation: int
+    track_no: int
+    first_seen: float
+    last_seen: float
+    detections: int = 0
+    peak_speed_mps: float = 0.0
+    width_m: float | None = None
+    height_m: float | None = None
+    min_range_m: float | None = None
+    last_point: tuple[float, float, float, float] | None = None  # t, x, y, z
+    last_sample_t: float = -math.inf
+    pending: list[dict[str, float]] = field(default_factory=list)
+    db_id: int | None = None
+    dirty: bool = True
+
+
+class TrackBook:
+    """Per-track summaries from telemetry messages. `sample_hz`: trajectory samples per second kept."""
+
+    def __init__(self, sample_hz: float):
+        self.min_dt = 1.0 / sample_hz
+        self.tracks: dict[tuple[int, int], TrackSummary] = {}
+
+    def add(self, tm: dict[str, Any], generation: int = 0) -> None:
+        """Fold in one frame's telemetry; `generation` tells pipelines apart (their track ids restart)."""
+        t = float(tm["captured_at"])
+        for d in tm.get("detections", ()):
+            key = (generation, int(d["track_id"]))
+            tr = self.tracks.get(key)
+            if tr is None:
+                tr = self.tracks[key] = TrackSummary(generation, d["track_id"], t, t)
+            self._update(tr, d, t)
+
+    def _update(self, tr: TrackSummary, d: dict[str, Any], t: float) -> None:
+        tr.last_seen, tr.detections, tr.dirty = t, tr.detections + 1, True
+        x, y, z = float(d["x"]), float(d["y"]), float(d["z"])
+        if tr.last_point is not None:
+            t0, x0, y0, z0 = tr.last_point
+            if t - t0 >= 0.05:  # speeds over at least 50 ms (single-frame differences are noise)
+                tr.peak_speed_mps = max(tr.peak_speed_mps, math.dist((x, y, z), (x0, y0, z0)) / (t - t0))
+                tr.last_point = (t, x, y, z)
+        else:
+            tr.last_point = (t, x, y, z)
+        if d.get("size_m"):
+            tr.width_m, tr.height_m = float(d["size_m"][0]), float(d["size_m"][1])
+        tr.min_range_m = d["r"] if tr.min_range_m is None else min(tr.min_range_m, float(d["r"]))
+        if t - tr.last_sample_t >= self.min_dt * 0.999:
+            tr.last_sample_t = t
+            tr.pending.append({"t": t, "x": x, "y": y, "z": z, "r": float(d["r"]),
+                               "theta_deg": float(d["theta_deg"]), "phi_deg": float(d["phi_deg"])})
+
+    def forget_before(self, t: float) -> None:
+        """Drop summaries last seen before t that have nothing left to write."""
+        for k in [k for k, tr in self.tracks.items() if tr.last_seen < t and not tr.dirty]:
+            del self.tracks[k]
+
+
+def flush(sessions: sessionmaker[Session], run_id: str, book: TrackBook) -> int:
+    """Write every changed track and its new samples in one transaction; returns the samples written."""
+    n = 0
+    with sessions() as db, db.begin():
+        for tr in book.tracks.values():
+            if not tr.dirty:
+                continue
+            row = db.get(Track, tr.db_id) if tr.db_id is not None else None
+            if row is None:
+                row = Track(run_id=f"{run_id}.{tr.generation}", track_no=tr.track_no, first_seen=tr.first_seen,
+                            last_seen=tr.last_seen, detections=0, peak_speed_mps=0.0)
+                db.add(row)
+            row.last_seen, row.detections, row.peak_speed_mps = tr.last_seen, tr.detections, tr.peak_speed_mps
+            row.width_m, row.height_m, row.min_range_m = tr.width_m, tr.height_m, tr.min_range_m
+            db.flush()
+            tr.db_id = row.id
+            db.add_all(TrackPoint(track_id=row.id, **p) for p in tr.pending)
+            n += len(tr.pending)
+    for tr in book.tracks.values():  # committed: only now forget what was written
+        tr.pending.clear()
+        tr.dirty = False
+    return n
+
+
+class TrackWriter:
+    """The asyncio task that feeds a TrackBook from the runtime and flushes it every `flush_s`."""
+
+    def __init__(self, runtime: Runtime, sessions: sessionmaker[Session], sample_hz: float, flush_s: float):
+        self.runtime, self.sessions, self.flush_s = runtime, sessions, flush_s
+        self.book = TrackBook(sample_hz)
+        self.run_id = time.strftime("%Y%m%dT%H%M%S", time.gmtime()) + f"-{int(time.time() * 1000) % 1000:03d}"
+        self.written = 0
+        self.errors = 0
+
+    async def run(self) -> None:
+        loop = asyncio.get_running_loop()
+        ready = asyncio.Event()
+        sub = self.runtime.hub.subscribe(maxsize=256, notify=lambda: loop.call_soon_threadsafe(ready.set),
+                                         name="track-writer")
+        try:
+            while True:
+                with contextlib.suppress(TimeoutError):
+                    await asyncio.wait_for(ready.wait(), self.flush_s)
+                ready.clear()
+                self._take(sub.drain())
+                await self._flush()
+                if sub.closed and not len(sub):
+                    return
+        finally:
+            self.runtime.hub.unsubscribe(sub)
+            self._take(sub.drain())
+            await asyncio.shield(self._flush())
+
+    def _take(self, events: list[FrameEvent]) -> None:
+        for ev in events:
+            self.book.add(ev.telemetry, ev.generation)
+
+    async def _flush(self) -> None:
+        try:
+            self.written += await asyncio.to_thread(flush, self.sessions, self.run_id, self.book)
+            self.book.forget_before(time.time() - 60.0)
+        except Exception:
+            self.errors += 1
+            log.exception("writing tracks failed (kept in memory, retried at the next flush)")
+
+
+def list_tracks(db: Session, start: float | None, end: float | None, limit: int) -> list[Track]:
+    q = select(Track).order_by(Track.first_seen.desc()).limit(limit)
+    if start is not None:
+        q = q.where(Track.last_seen >= start)
+    if end is not None:
+        q = q.where(Track.first_seen <= end)
+    return list(db.scalars(q))
+
+
+def get_track(db: Session, track_id: int) -> tuple[Track, list[TrackPoint]]:
+    tr = db.get(Track, track_id)
+    if tr is None:
+        raise NotFound(f"no track with id {track_id}")
+    pts = list(db.scalars(select(TrackPoint).where(TrackPoint.track_id == track_id).order_by(TrackPoint.t)))
+    return tr, pts

@@ -1,0 +1,71 @@
+"""`tmeye serve`: the operator console server (FastAPI under uvicorn) on a rig runtime."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import socket
+import sys
+from typing import Any
+
+from tmeye.errors import UserError
+
+LOG_FORMAT = "%(asctime)s %(levelname)s %(name)s: %(message)s"
+
+
+def register(subparsers: Any) -> None:
+    p = subparsers.add_parser("serve", help="run the operator console server (REST, WebSocket, browser console)")
+    p.add_argument("--host", help="address to listen on (default 127.0.0.1)")
+    p.add_argument("--port", type=int, help="TCP port (default 8080; 0: any free port)")
+    p.add_argument("--data-dir", help="database, keys and uploads (default ./tmeye-data)")
+    p.add_argument("--source", choices=("sim", "files", "usb", "rtsp"), help="frame source (default sim)")
+    p.add_argument("inputs", nargs="*", help="LEFT RIGHT of a real source")
+    p.add_argument("--scenario", help="simulated scene (default endless; finite scenarios repeat)")
+    p.add_argument("--seed", type=int, help="simulated scene seed")
+    p.add_argument("--rig", help="rig file (default: the active calibration record, else the simulator's rig)")
+    p.add_argument("--servo", help="sim (default), none, or a driver URL (maestro:/dev/ttyACM0, ascii:/dev/ttyUSB0)")
+    p.add_argument("--log-level", choices=("debug", "info", "warning", "error"))
+    p.set_defaults(func=run)
+
+
+def settings_from(args: argparse.Namespace) -> Any:
+    from pydantic import ValidationError
+
+    from server.services.errors import one_line
+    from server.settings import Settings
+
+    given = {k: v for k, v in {"host": args.host, "port": args.port, "data_dir": args.data_dir,
+                               "source": args.source, "scenario": args.scenario, "seed": args.seed,
+                               "rig": args.rig, "servo": args.servo, "log_level": args.log_level}.items()
+             if v is not None}
+    if args.inputs:
+        given["inputs"] = list(args.inputs)
+    try:
+        return Settings(**given)
+    except ValidationError as exc:
+        raise UserError(f"bad setting: {one_line(exc)}") from None
+
+
+def run(args: argparse.Namespace) -> int:
+    import uvicorn
+
+    from server.app import create_app
+
+    settings = settings_from(args)
+    logging.basicConfig(level=settings.log_level.upper(), format=LOG_FORMAT, stream=sys.stderr, force=True)
+    try:
+        sock = socket.create_server((settings.host, settings.port), reuse_port=False)
+    except OSError as exc:
+        raise UserError(f"cannot listen on {settings.host}:{settings.port}: {exc.strerror or exc}") from None
+    port = sock.getsockname()[1]
+    url = f"http://{settings.host}:{port}/"
+    pw = settings.data_dir / "initial-admin-password"
+    print(f"TMEye console: {url}  (API docs {url}api/docs)", flush=True)
+    print(f"log in as 'admin'; on first start its password is written to {pw.resolve()}", flush=True)
+    config = uvicorn.Config(create_app(settings), log_config=None, log_level=settings.log_level,
+                            timeout_graceful_shutdown=2, ws_ping_interval=20, access_log=False)
+    server = uvicorn.Server(config)
+    server.run(sockets=[sock])
+    if not server.started:
+        raise UserError("the server did not start (see the log above)")
+    return 0
