@@ -42,9 +42,11 @@ def servo_state(rt: Runtime) -> dict[str, Any]:
     ev = rt.latest
     if rt.servo is None:
         return {"configured": False}
-    out: dict[str, Any] = {"mode": str(rt.servo.mode)}
+    out: dict[str, Any] = {}
     if ev is not None and ev.servo is not None:
-        out = ev.servo.as_dict()
+        out = ev.servo.as_dict()  # the angles at the last capture
+    goal = rt.servo.goal  # the operator's wishes as they are now (the frame may predate them)
+    out.update(mode=str(rt.servo.mode), goal=None if goal is None else {"pan_deg": goal[0], "tilt_deg": goal[1]})
     pan, tilt = rt.servo.limits
     out.update(configured=True,
                limits={"pan_deg": [pan.min_deg, pan.max_deg], "tilt_deg": [tilt.min_deg, tilt.max_deg]})
