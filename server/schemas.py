@@ -52,6 +52,13 @@ class ServoStatus(BaseModel):
     limits: dict[str, list[float]] | None = None
 
 
+class Subscription(BaseModel):
+    name: str
+    queued: int
+    delivered: int
+    dropped: int
+
+
 class Status(BaseModel):
     state: str
     frame: int | None
@@ -63,6 +70,8 @@ class Status(BaseModel):
     servo: ServoStatus
     faults: list[Fault]
     subscribers: int
+    subscriptions: list[Subscription] = Field(description="each consumer of the frames: a slow one drops its "
+                                                          "oldest messages, never delaying the tracker")
 
 
 class Detection(BaseModel):

@@ -36,6 +36,8 @@ class Settings(BaseSettings):
     login_window_s: int = Field(600, ge=1, description="login throttling window (s)")
     ws_queue: int = Field(8, ge=1, le=1024, description="telemetry messages queued per WebSocket client "
                                                         "before the oldest is dropped")
+    ws_ping_s: float = Field(20.0, gt=0, le=3600, description="WebSocket keep-alive ping interval (s); a client "
+                                                            "that does not answer within it is disconnected")
     track_sample_hz: float = Field(10.0, gt=0, le=30, description="trajectory samples stored per second per track")
     track_flush_s: float = Field(1.0, gt=0, le=60, description="how often the track writer commits (s)")
     ice_servers: list[str] = Field(default_factory=list, description="STUN/TURN URLs for WebRTC (none by default)")

@@ -63,7 +63,8 @@ def run(args: argparse.Namespace) -> int:
     print(f"TMEye console: {url}  (API docs {url}api/docs)", flush=True)
     print(f"log in as 'admin'; on first start its password is written to {pw.resolve()}", flush=True)
     config = uvicorn.Config(create_app(settings), log_config=None, log_level=settings.log_level,
-                            timeout_graceful_shutdown=2, ws_ping_interval=20, access_log=False)
+                            timeout_graceful_shutdown=2, ws_ping_interval=settings.ws_ping_s,
+                            ws_ping_timeout=settings.ws_ping_s, access_log=False)
     server = uvicorn.Server(config)
     server.run(sockets=[sock])
     if not server.started:

@@ -92,6 +92,12 @@ class Hub(Generic[T]):
     def subscribers(self) -> int:
         return len(self._subs)
 
+    def stats(self) -> list[dict[str, Any]]:
+        """Per subscription: name, items waiting, delivered and dropped (a slow reader drops, no one waits)."""
+        with self._lock:
+            subs = list(self._subs)
+        return [{"name": s.name, "queued": len(s), "delivered": s.delivered, "dropped": s.dropped} for s in subs]
+
     def publish(self, item: T) -> None:
         with self._lock:
             subs = list(self._subs)

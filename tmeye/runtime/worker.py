@@ -187,7 +187,8 @@ class Runtime:
         return {"state": self.state, "frame": ev.frame_no if ev else None, "fps": round(self.fps, 2),
                 "frames_processed": self.frames, "skipped_frames": self.skipped, "frame_errors": self.frame_errors,
                 "source": describe_source(self.comp) if self.comp else {"kind": self.config.source},
-                "servo": servo, "subscribers": self.hub.subscribers, "faults": faults}
+                "servo": servo, "subscribers": self.hub.subscribers, "subscriptions": self.hub.stats(),
+                "faults": faults}
 
     # --- the worker ----------------------------------------------------------------------------------
     def _run(self) -> None:
