@@ -10,7 +10,6 @@ from pathlib import Path
 
 import httpx
 import pytest
-
 from server_helpers import Server, openapi_routes, start_server
 
 PUBLIC = {("GET", "/api/health"), ("POST", "/api/auth/login")}
