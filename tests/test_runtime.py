@@ -1,0 +1,166 @@
+"""The runtime shared by `tmeye track` and `tmeye serve`: drop-oldest publishing that never blocks the
+worker, pacing with skipped frames counted, operator servo control, live tuning and rig switching."""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import pytest
+
+from tmeye.runtime import Hub, Runtime, RuntimeConfig, ServoMode, ServoRequestError, TrackerTuning
+from tmeye.runtime.compose import ComposeError, LoopingSim
+from tracker.sim.scenarios import SimRig, get_scenario
+
+
+def test_a_full_subscription_drops_its_oldest_and_counts() -> None:
+    hub: Hub[int] = Hub()
+    slow = hub.subscribe(maxsize=3, name="slow")
+    fast = hub.subscribe(maxsize=100, name="fast")
+    for i in range(10):
+        hub.publish(i)
+    assert slow.drain() == [7, 8, 9] and slow.dropped == 7
+    assert fast.drain() == list(range(10)) and fast.dropped == 0
+    assert {s["name"]: s["dropped"] for s in hub.stats()} == {"slow": 7, "fast": 0}
+
+
+def test_a_blocking_consumer_never_stalls_the_publisher() -> None:
+    hub: Hub[int] = Hub()
+    release = threading.Event()
+    hub.subscribe(maxsize=2, notify=lambda: None, name="never-read")
+    hub.subscribe(maxsize=2, notify=lambda: release.wait(0) or None, name="notify-ok")
+    bad = hub.subscribe(maxsize=2, name="raises")
+    bad.notify = lambda: (_ for _ in ()).throw(RuntimeError("loop closed"))
+    t0 = time.perf_counter()
+    for i in range(1000):
+        hub.publish(i)
+    assert time.perf_counter() - t0 < 5.0  # nothing waited (a generous bound: this is no benchmark)
+    assert all(s["queued"] == 2 for s in hub.stats())
+
+
+def test_subscription_get_ends_when_closed() -> None:
+    hub: Hub[int] = Hub()
+    sub = hub.subscribe(maxsize=4)
+    hub.publish(1)
+    hub.close()
+    assert sub.get(0.1) == 1 and sub.get(0.1) is None and sub.closed
+
+
+def test_looping_sim_keeps_time_increasing() -> None:
+    sim = LoopingSim(SimRig(get_scenario("walk")))
+    n = get_scenario("walk").frames
+    assert n is not None
+    sim.skip(n - 2)
+    frames = [sim.read() for _ in range(4)]
+    assert [f.index for f in frames if f] == [n - 2, n - 1, n, n + 1]
+    ts = [f.t for f in frames if f]
+    assert all(b > a for a, b in zip(ts, ts[1:], strict=False))
+
+
+def test_runtime_runs_publishes_and_stops() -> None:
+    rt = Runtime(RuntimeConfig(scenario="walk", servo=None, realtime=False, max_frames=20, loop_source=False))
+    sub = rt.hub.subscribe(maxsize=100)
+    rt.start()
+    rt.join(60)
+    evs = sub.drain()
+    assert [e.frame_no for e in evs] == list(range(20)) and rt.state == "ended"
+    assert sum(e.telemetry["detected"] for e in evs) >= 15
+    assert sub.closed
+    rt.stop()
+
+
+def test_realtime_skips_frames_it_cannot_process_in_time() -> None:
+    rt = Runtime(RuntimeConfig(scenario="walk", servo=None, realtime=True, loop_source=True))
+    rt.start()
+    assert rt.comp is not None
+    slow = rt.comp.pipeline.step
+
+    def step_slowly(frame):  # type: ignore[no-untyped-def]
+        time.sleep(0.1)  # three frame periods
+        return slow(frame)
+    rt.comp.pipeline.step = step_slowly  # type: ignore[method-assign]
+    sub = rt.hub.subscribe(maxsize=100)
+    time.sleep(1.5)
+    rt.stop()
+    frames = [e.frame_no for e in sub.drain()][1:]  # the first may have started before the slow step
+    gaps = [b - a for a, b in zip(frames, frames[1:], strict=False)]
+    assert gaps and min(gaps) >= 3 and rt.skipped >= 2 * len(gaps)  # newest frame next, never a backlog
+    assert rt.status()["skipped_frames"] == rt.skipped
+
+
+def _closed_loop() -> Runtime:
+    rt = Runtime(RuntimeConfig(scenario="walk", servo="sim", realtime=True, loop_source=True))
+    rt.start()
+    return rt
+
+
+def _wait_angles(rt: Runtime, pan: float, tilt: float, timeout: float = 5.0) -> tuple[float, float]:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        ev = rt.latest
+        if ev is not None and ev.servo is not None and abs(ev.servo.pan_deg - pan) < 0.5 \
+                and abs(ev.servo.tilt_deg - tilt) < 0.5:
+            return ev.servo.pan_deg, ev.servo.tilt_deg
+        time.sleep(0.05)
+    ev = rt.latest
+    raise AssertionError(f"mount at {ev.servo if ev else None}, wanted {pan}, {tilt}")
+
+
+def test_servo_modes_goto_and_jog() -> None:
+    rt = _closed_loop()
+    try:
+        rt.servo_goto(15.0, 4.0).result(2)
+        assert rt.servo is not None and rt.servo.mode is ServoMode.MANUAL
+        _wait_angles(rt, 15.0, 4.0)
+        with pytest.raises(ServoRequestError, match="outside the mount's range"):
+            rt.servo_goto(15.0, 85.0).result(2)
+        rt.servo_jog(10.0, 0.0, 1.0).result(2)
+        _wait_angles(rt, 25.0, 4.0)
+        rt.servo_mode(ServoMode.HOME).result(2)
+        _wait_angles(rt, 0.0, 0.0)
+        rt.servo_mode(ServoMode.AUTO).result(2)
+        assert rt.servo.mode is ServoMode.AUTO and rt.servo.goal is None
+    finally:
+        rt.stop()
+
+
+def test_tuning_applies_from_the_next_frame_and_rejects_bad_fields() -> None:
+    rt = Runtime(RuntimeConfig(scenario="walk", servo=None, realtime=True))
+    rt.start()
+    try:
+        new = rt.tuning.updated({"detector": {"epsilon": 20}, "tracks": {"gate_px": 30.0}})
+        rt.set_tuning(new).result(2)
+        assert rt.comp is not None
+        assert rt.comp.pipeline.subtractor.cfg.epsilon == 20 and rt.comp.pipeline.tracker.cfg.gate_px == 30.0
+        with pytest.raises(ValueError, match="stride"):
+            TrackerTuning().updated({"detector": {"stride": 2}})
+        with pytest.raises(ValueError, match="unknown tracker settings section"):
+            TrackerTuning().updated({"lens": {}})
+    finally:
+        rt.stop()
+
+
+def test_rig_switch_keeps_frames_increasing() -> None:
+    rt = Runtime(RuntimeConfig(scenario="walk", servo=None, realtime=True))
+    rt.start()
+    try:
+        assert rt.comp is not None
+        sub = rt.hub.subscribe(maxsize=1000)
+        rig = rt.comp.rig
+        rt.switch_rig(rig).result(60)
+        time.sleep(0.5)
+        evs = sub.drain()
+        assert any(e.generation == 1 for e in evs) and evs[0].generation == 0
+        frames = [e.frame_no for e in evs]
+        assert all(b > a for a, b in zip(frames, frames[1:], strict=False))
+    finally:
+        rt.stop()
+
+
+def test_bad_configuration_is_a_one_line_error() -> None:
+    with pytest.raises(ComposeError, match="unknown scenario"):
+        Runtime(RuntimeConfig(scenario="nope", servo=None)).start()
+    with pytest.raises(ComposeError, match="needs a rig file"):
+        Runtime(RuntimeConfig(source="files", inputs=("a.mp4", "b.mp4"), servo=None)).start()
+    with pytest.raises(ValueError, match="two inputs"):
+        RuntimeConfig(source="usb", inputs=("0",))

@@ -1,0 +1,54 @@
+"""Passwords, tokens, CSRF values and login throttling (pure functions, no server)."""
+
+from __future__ import annotations
+
+import pytest
+
+from server.security import (
+    LoginThrottle,
+    csrf_token,
+    hash_password,
+    make_token,
+    new_secret,
+    read_token,
+    verify_password,
+)
+
+
+def test_argon2id_with_owasp_parameters() -> None:
+    h = hash_password("a long enough password")
+    assert h.startswith("$argon2id$") and "m=19456,t=2,p=1" in h
+    assert verify_password(h, "a long enough password") and not verify_password(h, "a long enough passworD")
+    assert not verify_password("not a hash", "x")
+    with pytest.raises(ValueError, match="12 to 128"):
+        hash_password("short")
+    with pytest.raises(ValueError, match="12 to 128"):
+        hash_password("x" * 129)
+
+
+def test_tokens_are_signed_and_expire() -> None:
+    key = new_secret()
+    tok = make_token(key, "abc", 2000.0)
+    assert read_token(key, tok, now=1000.0) is not None
+    assert read_token(key, tok, now=2000.0) is None  # expired
+    assert read_token(new_secret(), tok, now=1000.0) is None  # another key
+    forged = tok.replace(".2000.", ".9999.")
+    assert read_token(key, forged, now=1000.0) is None
+    assert read_token(key, "garbage", now=1000.0) is None
+    assert csrf_token(key, "abc") != csrf_token(key, "abd")
+
+
+def test_throttle_by_username_and_by_address() -> None:
+    now = [0.0]
+    th = LoginThrottle(per_user=5, per_address=20, window_s=600, clock=lambda: now[0])
+    for _ in range(5):
+        assert th.retry_after("Bob", "1.2.3.4") == 0
+        th.failed("bob", "1.2.3.4")
+    assert th.retry_after("BOB", "5.6.7.8") == 601  # the username is throttled from any address
+    now[0] = 601.0
+    assert th.retry_after("bob", "1.2.3.4") == 0  # the window passed
+    for i in range(20):
+        th.failed(f"user{i}", "9.9.9.9")
+    assert th.retry_after("someone-else", "9.9.9.9") > 0
+    th.succeeded("bob")
+    assert th.retry_after("bob", "1.2.3.4") == 0
