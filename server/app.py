@@ -23,6 +23,7 @@ from server.services import control
 from server.services import users as user_service
 from server.services.calibration import CalibrationJobs
 from server.services.events import EventBus
+from server.services.monitor import Monitor
 from server.services.tracks import TrackWriter
 from server.settings import Settings
 from tmeye import __version__
@@ -65,7 +66,7 @@ def _prepare_db(settings: Settings) -> tuple[AppContext, TrackerTuning, object]:
         rig = None if settings.rig else cal_service.active_rig(db, settings.data_dir)
     tuning = TrackerTuning().updated(saved) if saved else TrackerTuning()
     throttle = LoginThrottle(settings.login_user_failures, settings.login_address_failures, settings.login_window_s)
-    ctx = AppContext(settings, engine, sessions, key, throttle, None, None, None)  # type: ignore[arg-type]
+    ctx = AppContext(settings, engine, sessions, key, throttle, None, None, None, Monitor())  # type: ignore[arg-type]
     return ctx, tuning, rig
 
 
@@ -83,12 +84,15 @@ def create_app(settings: Settings, runtime: Runtime | None = None) -> FastAPI:
             ctx.calibrations = CalibrationJobs(ctx.sessions, settings.data_dir, ctx.events)
             writer = TrackWriter(rt, ctx.sessions, settings.track_sample_hz, settings.track_flush_s)
             writer_task = asyncio.create_task(writer.run(), name="track-writer")
+            monitor_task = asyncio.create_task(ctx.monitor.run(), name="loop-monitor")
             ctx.extras["track_writer"] = writer
             app.state.ctx = ctx
             log.info("tracker running: %s", rt.status()["source"])
             yield
         finally:
             log.info("stopping")
+            if "track_writer" in ctx.extras:
+                monitor_task.cancel()
             await asyncio.to_thread(rt.stop)
             if "track_writer" in ctx.extras:
                 with contextlib.suppress(Exception):

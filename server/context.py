@@ -9,6 +9,7 @@ from sqlalchemy import Engine
 from sqlalchemy.orm import Session, sessionmaker
 
 from server.security import LoginThrottle
+from server.services.monitor import Monitor
 from server.settings import Settings
 from tmeye.runtime import Runtime
 
@@ -27,4 +28,5 @@ class AppContext:
     runtime: Runtime
     events: EventBus
     calibrations: CalibrationJobs
+    monitor: Monitor
     extras: dict[str, object] = field(default_factory=dict)

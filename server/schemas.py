@@ -52,6 +52,13 @@ class ServoStatus(BaseModel):
     limits: dict[str, list[float]] | None = None
 
 
+class Percentiles(BaseModel):
+    n: int
+    p50: float | None
+    p99: float | None
+    max: float | None
+
+
 class Subscription(BaseModel):
     name: str
     queued: int
@@ -70,6 +77,8 @@ class Status(BaseModel):
     servo: ServoStatus
     faults: list[Fault]
     subscribers: int
+    event_loop_lag_ms: Percentiles
+    ws_send_latency_ms: Percentiles = Field(description="capture to WebSocket send, recent messages")
     subscriptions: list[Subscription] = Field(description="each consumer of the frames: a slow one drops its "
                                                           "oldest messages, never delaying the tracker")
 

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from fastapi import APIRouter, HTTPException
+from typing import Annotated
+
+from fastapi import APIRouter, HTTPException, Query
 
 from server.deps import CtxDep, Viewer
 from server.schemas import Health, Status, Telemetry
@@ -23,9 +25,12 @@ def health(ctx: CtxDep) -> Health:
 
 
 @router.get("/status", response_model=Status, summary="Frame, rate, skipped frames, source, servo, faults")
-def get_status(ctx: CtxDep, _p: Viewer) -> Status:
+def get_status(ctx: CtxDep, _p: Viewer,
+               window_s: Annotated[float, Query(gt=0, le=600, description="window of the lag and latency "
+                                                "percentiles (s)")] = 60.0) -> Status:
     st = ctx.runtime.status()
     st["servo"] = servo_state(ctx.runtime)
+    st.update(ctx.monitor.figures(window_s))
     return Status.model_validate(st)
 
 

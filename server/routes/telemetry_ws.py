@@ -50,6 +50,7 @@ async def telemetry_ws(ws: WebSocket) -> None:
             ready.clear()
             for ev in sub.drain():
                 await ws.send_text(ev.telemetry_json)
+                ctx.monitor.sent(ev.captured_at)
             if sub.closed:
                 break
     except (WebSocketDisconnect, RuntimeError, OSError):

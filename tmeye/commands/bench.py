@@ -28,10 +28,31 @@ def register(subparsers: Any) -> None:
     p.add_argument("--repeats", type=int, default=5,
                    help="passes per measurement; each figure is the best of them (default 5)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--server", action="store_true",
+                   help="measure `tmeye serve` under load instead: WebSocket telemetry clients, skipped frames, "
+                        "event-loop lag, capture-to-send latency, CPU")
+    p.add_argument("--seconds", type=float, default=30.0, help="--server: measurement window (default 30)")
+    p.add_argument("--clients", type=int, default=10, help="--server: WebSocket clients (default 10)")
+    p.add_argument("--serve-args", default="", help="--server: extra `tmeye serve` arguments, e.g. '--servo none'")
     p.set_defaults(func=run)
 
 
+def run_server(args: argparse.Namespace) -> int:
+    import shlex
+
+    from tmeye.benchserver import run_server_bench
+
+    if not 1 <= args.clients <= 100:
+        raise UserError(f"--clients must be 1 to 100, got {args.clients}")
+    if not 5 <= args.seconds <= 7200:
+        raise UserError(f"--seconds must be 5 to 7200, got {args.seconds}")
+    emit(run_server_bench(args.seconds, args.clients, 5.0, shlex.split(args.serve_args)), args.json)
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
+    if args.server:
+        return run_server(args)
     from tracker.bench import run_bench
     from tracker.sim.scenarios import get_scenario
 

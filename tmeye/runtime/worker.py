@@ -222,8 +222,8 @@ class Runtime:
     def _one_frame(self) -> bool:
         comp = self.comp
         assert comp is not None
-        captured_at = time.time()
         frame = comp.source.read()
+        captured_at = time.time()  # a rendered or decoded frame exists from now on
         if frame is None:
             log.info("source ended after %d frames", self.frames)
             return False

@@ -1,0 +1,44 @@
+"""Server health figures: event-loop lag (a task that asks to sleep 50 ms and measures how late it wakes)
+and capture-to-WebSocket-send latency, each over a sliding window, as percentiles in milliseconds."""
+
+from __future__ import annotations
+
+import asyncio
+import time
+from collections import deque
+
+
+def percentiles(values: list[float]) -> dict[str, float | int | None]:
+    """{"n", "p50", "p99", "max"} of values (ms), None when empty."""
+    v = sorted(values)
+    if not v:
+        return {"n": 0, "p50": None, "p99": None, "max": None}
+    def q(p: float) -> float:
+        return round(v[min(len(v) - 1, int(round(p * (len(v) - 1))))], 3)
+    return {"n": len(v), "p50": q(0.5), "p99": q(0.99), "max": round(v[-1], 3)}
+
+
+class Monitor:
+    """window: samples kept per figure (at 20 lag samples per second, 1200 is a minute)."""
+
+    def __init__(self, window: int = 12000, send_window: int = 200000, period_s: float = 0.05):
+        self.period_s = period_s
+        self.lag_ms: deque[tuple[float, float]] = deque(maxlen=window)  # (monotonic s, ms)
+        self.send_ms: deque[tuple[float, float]] = deque(maxlen=send_window)
+
+    async def run(self) -> None:
+        while True:
+            t0 = time.perf_counter()
+            await asyncio.sleep(self.period_s)
+            t1 = time.perf_counter()
+            self.lag_ms.append((time.monotonic(), max(0.0, (t1 - t0 - self.period_s) * 1e3)))
+
+    def sent(self, captured_at: float) -> None:
+        self.send_ms.append((time.monotonic(), (time.time() - captured_at) * 1e3))
+
+    def figures(self, window_s: float = 60.0) -> dict[str, dict[str, float | int | None]]:
+        """Percentiles of the samples of the last window_s seconds (the window holds at most 10 minutes of lag
+        samples and 200,000 sends)."""
+        since = time.monotonic() - window_s
+        return {"event_loop_lag_ms": percentiles([v for t, v in self.lag_ms if t >= since]),
+                "ws_send_latency_ms": percentiles([v for t, v in list(self.send_ms) if t >= since])}
