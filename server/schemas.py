@@ -79,6 +79,7 @@ class Status(BaseModel):
     subscribers: int
     event_loop_lag_ms: Percentiles
     ws_send_latency_ms: Percentiles = Field(description="capture to WebSocket send, recent messages")
+    ws_delivery_ms: Percentiles = Field(description="end of the tracker's frame to WebSocket send")
     subscriptions: list[Subscription] = Field(description="each consumer of the frames: a slow one drops its "
                                                           "oldest messages, never delaying the tracker")
 

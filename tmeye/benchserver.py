@@ -112,7 +112,8 @@ def _report(m: dict[str, Any], seconds: float, cpu: float) -> dict[str, Any]:
     return {"seconds": seconds, "clients": len(rates), "source": s1["source"], "servo_mode": s1["servo"].get("mode"),
             "frames": frames, "skipped_frames": skipped, "skipped_pct": round(100.0 * skipped / frames, 3),
             "fps": s1["fps"], "event_loop_lag_ms": s1["event_loop_lag_ms"],
-            "ws_send_latency_ms": s1["ws_send_latency_ms"], "cpu_cores": round(cpu, 3),
+            "ws_send_latency_ms": s1["ws_send_latency_ms"], "ws_delivery_ms": s1["ws_delivery_ms"],
+            "cpu_cores": round(cpu, 3),
             "messages_per_s_per_client": {"min": round(min(rates), 2), "max": round(max(rates), 2)},
             "frames_strictly_increasing": all(c["increasing"] for c in m["clients"]),
             "frame_errors": s1["frame_errors"]}

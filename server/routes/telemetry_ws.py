@@ -50,7 +50,7 @@ async def telemetry_ws(ws: WebSocket) -> None:
             ready.clear()
             for ev in sub.drain():
                 await ws.send_text(ev.telemetry_json)
-                ctx.monitor.sent(ev.captured_at)
+                ctx.monitor.sent(ev.captured_at, ev.done_at)
             if sub.closed:
                 break
     except (WebSocketDisconnect, RuntimeError, OSError):

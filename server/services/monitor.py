@@ -25,6 +25,7 @@ class Monitor:
         self.period_s = period_s
         self.lag_ms: deque[tuple[float, float]] = deque(maxlen=window)  # (monotonic s, ms)
         self.send_ms: deque[tuple[float, float]] = deque(maxlen=send_window)
+        self.delivery_ms: deque[tuple[float, float]] = deque(maxlen=send_window)
 
     async def run(self) -> None:
         while True:
@@ -33,12 +34,16 @@ class Monitor:
             t1 = time.perf_counter()
             self.lag_ms.append((time.monotonic(), max(0.0, (t1 - t0 - self.period_s) * 1e3)))
 
-    def sent(self, captured_at: float) -> None:
-        self.send_ms.append((time.monotonic(), (time.time() - captured_at) * 1e3))
+    def sent(self, captured_at: float, processed_at: float) -> None:
+        """A telemetry message went out: capture -> send, and the part after the tracker was done."""
+        now, mono = time.time(), time.monotonic()
+        self.send_ms.append((mono, (now - captured_at) * 1e3))
+        self.delivery_ms.append((mono, (now - processed_at) * 1e3))
 
     def figures(self, window_s: float = 60.0) -> dict[str, dict[str, float | int | None]]:
         """Percentiles of the samples of the last window_s seconds (the window holds at most 10 minutes of lag
         samples and 200,000 sends)."""
         since = time.monotonic() - window_s
         return {"event_loop_lag_ms": percentiles([v for t, v in self.lag_ms if t >= since]),
-                "ws_send_latency_ms": percentiles([v for t, v in list(self.send_ms) if t >= since])}
+                "ws_send_latency_ms": percentiles([v for t, v in list(self.send_ms) if t >= since]),
+                "ws_delivery_ms": percentiles([v for t, v in list(self.delivery_ms) if t >= since])}

@@ -52,6 +52,9 @@ def run(args: argparse.Namespace) -> int:
     from server.app import create_app
 
     settings = settings_from(args)
+    # The tracker's worker thread and the event loop share the GIL: hand it over within 1 ms (Python's
+    # default 5 ms delayed WebSocket sends by up to that while the worker ran Python code).
+    sys.setswitchinterval(0.001)
     logging.basicConfig(level=settings.log_level.upper(), format=LOG_FORMAT, stream=sys.stderr, force=True)
     try:
         sock = socket.create_server((settings.host, settings.port), reuse_port=False)
@@ -64,7 +67,7 @@ def run(args: argparse.Namespace) -> int:
     print(f"log in as 'admin'; on first start its password is written to {pw.resolve()}", flush=True)
     config = uvicorn.Config(create_app(settings), log_config=None, log_level=settings.log_level,
                             timeout_graceful_shutdown=2, ws_ping_interval=settings.ws_ping_s,
-                            ws_ping_timeout=settings.ws_ping_s, access_log=False)
+                            ws_ping_timeout=settings.ws_ping_s, ws_per_message_deflate=False, access_log=False)
     server = uvicorn.Server(config)
     server.run(sockets=[sock])
     if not server.started:
