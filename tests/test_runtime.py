@@ -164,3 +164,24 @@ def test_bad_configuration_is_a_one_line_error() -> None:
         Runtime(RuntimeConfig(source="files", inputs=("a.mp4", "b.mp4"), servo=None)).start()
     with pytest.raises(ValueError, match="two inputs"):
         RuntimeConfig(source="usb", inputs=("0",))
+
+
+def test_a_failing_source_is_a_fault_not_a_dead_worker() -> None:
+    rt = Runtime(RuntimeConfig(scenario="walk", servo=None, realtime=True))
+    rt.start()
+    try:
+        assert rt.comp is not None
+        good = rt.comp.source.read
+        rt.comp.source.read = lambda: (_ for _ in ()).throw(OSError("camera unplugged"))  # type: ignore[method-assign]
+        deadline = time.monotonic() + 5
+        while not rt.status()["faults"] and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert rt.status()["faults"] == [{"kind": "source", "message": "OSError: camera unplugged"}]
+        rt.comp.source.read = good  # type: ignore[method-assign]
+        n = rt.frames
+        deadline = time.monotonic() + 5
+        while rt.frames <= n + 5 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert rt.running and rt.frames > n + 5 and rt.status()["faults"] == []
+    finally:
+        rt.stop()

@@ -34,6 +34,7 @@ from tracker.pipeline import FrameResult
 
 log = logging.getLogger("tmeye.runtime")
 R = TypeVar("R")
+SOURCE_RETRY_S = 0.5
 
 
 @dataclass(frozen=True)
@@ -98,6 +99,7 @@ class Runtime:
         self._last_t: float | None = None
         self._last_done: float | None = None
         self.generation = 0
+        self.source_fault: str | None = None
 
     # --- life cycle ----------------------------------------------------------------------------------
     def start(self, rig: StereoRig | None = None) -> None:
@@ -181,6 +183,8 @@ class Runtime:
         faults: list[dict[str, str]] = []
         if self.error:
             faults.append({"kind": "runtime", "message": self.error})
+        if self.source_fault:
+            faults.append({"kind": "source", "message": self.source_fault})
         if ev is not None and ev.servo is not None and ev.servo.fault:
             faults.append({"kind": "servo", "message": ev.servo.fault})
         servo = ev.servo.as_dict() if ev is not None and ev.servo is not None else None
@@ -222,7 +226,15 @@ class Runtime:
     def _one_frame(self) -> bool:
         comp = self.comp
         assert comp is not None
-        frame = comp.source.read()
+        try:
+            frame = comp.source.read()
+        except Exception as exc:  # a camera or stream error: reported, retried after a pause
+            if self.source_fault is None:
+                log.warning("source failed: %s", exc)
+            self.source_fault = f"{type(exc).__name__}: {exc}".splitlines()[0]
+            self._stop.wait(SOURCE_RETRY_S)
+            return True
+        self.source_fault = None
         captured_at = time.time()  # a rendered or decoded frame exists from now on
         if frame is None:
             log.info("source ended after %d frames", self.frames)
