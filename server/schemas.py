@@ -42,6 +42,11 @@ class Fault(BaseModel):
 
 
 class ServoStatus(BaseModel):
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"mode": "auto", "pan_deg": 12.31, "tilt_deg": -2.05, "fault": None, "goal": None,
+         "command": {"pan_deg": 12.4, "tilt_deg": -2.0, "reason": "track"}, "configured": True,
+         "limits": {"pan_deg": [-170.0, 170.0], "tilt_deg": [-30.0, 80.0]}}]})
+
     mode: Literal["auto", "manual", "hold", "home"] | None = None
     pan_deg: float | None = None
     tilt_deg: float | None = None
@@ -104,6 +109,17 @@ class Detection(BaseModel):
 
 class Telemetry(BaseModel):
     """One frame: the fields of `tmeye track --json`, the capture time, the servo state, every detection."""
+
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"frame": 5120, "t": 170.666667, "offset_s": 0.0, "detected": True, "track_id": 7, "objects": 1, "fps": 30.0,
+         "step_ms": 2.41, "captured_at": 1795376486.828464, "x": 1.2041, "y": 0.6542, "z": 11.7028, "r": 11.7829,
+         "theta_deg": 5.8745, "phi_deg": -3.1832, "sigma_r": 0.0151, "sigma_theta_deg": 0.0049,
+         "sigma_phi_deg": 0.0048, "latency_ms": 2.6, "servo": {"mode": "auto", "pan_deg": 5.8, "tilt_deg": -3.1,
+                                                                 "fault": None},
+         "detections": [{"track_id": 7, "box": [566, 226, 622, 330], "centroid": [595.99, 275.63], "area_px": 2316,
+                         "disparity_px": 15.294, "size_m": [0.549, 1.687], "x": 1.2041, "y": 0.6542, "z": 11.7028,
+                         "r": 11.7829, "theta_deg": 5.8745, "phi_deg": -3.1832, "sigma_r": 0.0151,
+                         "sigma_theta_deg": 0.0049, "sigma_phi_deg": 0.0048}]}]})
 
     frame: int
     t: float
