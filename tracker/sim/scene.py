@@ -107,22 +107,42 @@ Trajectory = Callable[[float], F64]
 
 @dataclass
 class MovingObject:
-    """A round target plate of radius `radius_m` facing the rig (parallel to the image planes), whose
-    centre follows `trajectory(t)` in world metres. target_id > 0; id 1 is the primary target."""
+    """A moving target whose centre follows `trajectory(t)` (world metres, (3,)); target_id > 0, id 1 is
+    the primary target. `visible(t)`: whether it is in the scene at time t (s).
+
+    half_h_m None: a round plate of radius `radius_m`, parallel to the image planes (it turns with the
+    cameras). half_h_m set: an upright board (a person) 2·radius_m wide and 2·half_h_m tall, vertical in
+    the world and turned about the vertical to face the gimbal base (it does not turn with the cameras);
+    its texture's width spans the board's width."""
 
     target_id: int
     trajectory: Trajectory
     radius_m: float
     texture: U8
     visible: Callable[[float], bool] = lambda t: True
+    half_h_m: float | None = None
+
+    @property
+    def area_m2(self) -> float:
+        """The object's area (m²): what its image covers at range z is about area·(f/z)² pixels."""
+        if self.half_h_m is None:
+            return float(np.pi * self.radius_m ** 2)
+        return 4.0 * self.radius_m * self.half_h_m
 
     def surface(self, t: float, R_world_rig: F64) -> Surface:
-        """The plate at time t as a disc Surface, its axes along the rig's x and y axes."""
+        """The object at time t as a Surface: a disc along the rig's x and y axes, or an upright rect
+        (u horizontal, across the line of sight from the gimbal base; v = world down)."""
         tex = self.texture
         texel = 2.0 * self.radius_m / tex.shape[1]
-        return Surface(f"target{self.target_id}", self.trajectory(t), R_world_rig[:, 0], R_world_rig[:, 1],
-                       self.radius_m, self.radius_m, tex, texel, shape="disc", moving=True,
-                       target_id=self.target_id)
+        p = self.trajectory(t)
+        if self.half_h_m is None:
+            return Surface(f"target{self.target_id}", p, R_world_rig[:, 0], R_world_rig[:, 1],
+                           self.radius_m, self.radius_m, tex, texel, shape="disc", moving=True,
+                           target_id=self.target_id)
+        ground = float(np.hypot(p[0], p[2]))
+        u = np.array([p[2], 0.0, -p[0]]) / ground if ground > 1e-9 else np.array([1.0, 0.0, 0.0])
+        return Surface(f"target{self.target_id}", p, u, np.array([0.0, 1.0, 0.0]), self.radius_m,
+                       self.half_h_m, tex, texel, moving=True, target_id=self.target_id)
 
 
 def backdrop(rng: np.random.Generator) -> list[Surface]:
@@ -166,3 +186,18 @@ def plate_texture(rng: np.random.Generator, lo: int = 165, hi: int = 250) -> U8:
     ring = (r > 20) & (r < 24)
     tex[ring] = np.maximum(tex[ring].astype(np.int16) - 25, lo - 10).astype(np.uint8)
     return tex
+
+
+def person_texture(rng: np.random.Generator, lo: int = 110, hi: int = 240, texel_m: float = 0.01,
+                   size_m: tuple[float, float] = (0.5, 1.7)) -> U8:
+    """A person's texture, (round(height/texel), round(width/texel)) uint8 for size_m = (width, height)
+    metres: blobs of about 2.5 cm stretched to [lo, hi] (clothing) with a darker belt and collar band.
+    High contrast: a person's legs stand in front of the ground, only a few pixels of disparity nearer
+    than their background, where eq. (9) compares the texture with itself shifted by those few pixels
+    (at 75 grey levels of contrast about half of each person went undetected; at 130, a fifth)."""
+    w, h = (max(round(v / texel_m), 4) for v in size_m)
+    tex = smooth_texture(rng, (h, w), 2.5, lo, hi).astype(np.int16)
+    rows = np.arange(h)[:, None] / h  # 0 at the head, 1 at the feet
+    band = ((rows > 0.52) & (rows < 0.56)) | ((rows > 0.13) & (rows < 0.16))  # belt, collar
+    tex -= np.where(band, 30, 0).astype(np.int16)
+    return np.clip(tex, 0, 255).astype(np.uint8)
