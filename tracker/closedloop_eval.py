@@ -33,6 +33,7 @@ from tracker.evaluation import EvalReport, _Acc, _report, score_frame
 from tracker.pipeline import Pipeline
 from tracker.predict import CVPredictor, IMMPredictor, Measurement, TrackStatus, UKFBankPredictor
 from tracker.servo.sim import SimGimbalConfig, SimulatedGimbal
+from tracker.sim import endless
 from tracker.sim.render import FrameTruth
 from tracker.sim.scenarios import Scenario, SimRig, get_scenario
 
@@ -137,7 +138,10 @@ def _path(scenario: Scenario) -> Callable[[float], np.ndarray]:
 
 def mount_range(scenario: Scenario, margin_deg: float = 4.0) -> tuple[tuple[float, float], tuple[float, float]]:
     """(pan, tilt) ranges in degrees the mount visits following the primary target: its azimuth and
-    elevation over the scenario, widened by margin_deg."""
+    elevation over the scenario, widened by margin_deg. An endless scenario has a fixed range covering
+    every direction its objects reach (tracker.sim.endless.mount_range)."""
+    if scenario.endless:
+        return endless.mount_range(margin_deg)
     path = _path(scenario)
     pts = np.array([path(t) for t in np.arange(0.0, scenario.frames / scenario.fps, 0.05)])
     az = np.degrees(np.arctan2(pts[:, 0], pts[:, 2]))

@@ -12,6 +12,7 @@ from numpy.typing import NDArray
 from tracker.closedloop_path import MANOEUVRE
 from tracker.frames import GimbalState, StereoFrame
 from tracker.geometry import StereoRig, gimbal_rotation
+from tracker.sim.endless import EndlessScene
 from tracker.sim.render import FrameTruth, SimRenderer, TargetTruth
 from tracker.sim.rig import default_rig
 from tracker.sim.scene import MovingObject, Surface, backdrop, foliage, plate_texture
@@ -84,7 +85,12 @@ def _unity(t: float) -> float:
 
 @dataclass(frozen=True)
 class Scenario:
-    """A scripted run of the simulated rig. `paths` are (target id, trajectory) pairs: id 1 is primary."""
+    """A scripted run of the simulated rig. `paths` are (target id, trajectory) pairs: id 1 is primary;
+    `frames` its length at `fps` frames per second.
+
+    `script` (seed -> EndlessScene): an endless scenario, whose moving objects and light come from the
+    seeded script instead of `paths` and `gain` (which it leaves empty and at 1); its SimRig never runs
+    out, and `frames` is only the default length of bounded runs (`tmeye eval`, `tmeye bench`)."""
 
     name: str
     description: str
@@ -96,6 +102,11 @@ class Scenario:
     gimbal: Callable[[float], GimbalState] = _still
     closed_loop: bool = False
     tags: tuple[str, ...] = field(default_factory=tuple)
+    script: Callable[[int], EndlessScene] | None = None
+
+    @property
+    def endless(self) -> bool:
+        return self.script is not None
 
 
 SCENARIOS: dict[str, Scenario] = {
@@ -115,6 +126,10 @@ SCENARIOS: dict[str, Scenario] = {
         Scenario("manoeuvre", "closed loop: the servos follow a target turning at up to 30°/s, accelerating "
                  "and stopping, over azimuth -19° to +38°", frames=294, paths=((1, MANOEUVRE),),
                  closed_loop=True),
+        Scenario("endless", "people (0.5 x 1.7 m) entering, walking, stopping, turning and leaving at 3 to 30 m, "
+                 "for ever (seeded), beside a swaying bush, light ramps and ±20-30 % steps, now and then a "
+                 "second object; eval/bench run 2 minutes", frames=3600, paths=(), foliage=True,
+                 script=EndlessScene),
     )
 }
 
@@ -134,7 +149,11 @@ class SimFrame:
 
 class SimRig:
     """The simulated stereo rig as a frame source. Gimbal angles come from the scenario's schedule, or
-    from `step(gimbal)` when a servo loop closes through the simulator. Deterministic for a seed."""
+    from `step(gimbal)` when a servo loop closes through the simulator. Deterministic for a seed.
+
+    `index` counts the frames rendered since construction and the frames' times are index / fps (s), so
+    they keep increasing when a finite scenario is looped with `rewind()`; the scene's own time restarts
+    at each pass (`scene_t`). An endless scenario (`Scenario.script`) is never exhausted."""
 
     def __init__(self, scenario: Scenario, seed: int = 0, size: tuple[int, int] = (640, 480),
                  rig: StereoRig | None = None, noise_sigma: float = 1.2):
@@ -145,13 +164,33 @@ class SimRig:
         self._foliage = foliage(rng, np.array([-1.3, 1.0, 6.0]), 0.7, 0.5) if scenario.foliage else None
         textures = {1: plate_texture(rng), 2: plate_texture(rng, 150, 235)}
         self.objects = [MovingObject(tid, path, 0.3, textures[min(tid, 2)]) for tid, path in scenario.paths]
+        self.script = scenario.script(seed) if scenario.script is not None else None
         self.renderer = SimRenderer(self.rig, static, seed, noise_sigma)
         self.index = 0
+        self._pass_start = 0  # index of the current pass's first frame
         self.last_truth: FrameTruth | None = None
 
     @property
     def exhausted(self) -> bool:
-        return self.index >= self.scenario.frames
+        """Whether the current pass has rendered all the scenario's frames (never, for an endless one)."""
+        return self.script is None and self.index - self._pass_start >= self.scenario.frames
+
+    @property
+    def scene_t(self) -> float:
+        """The scene time (s) of the next frame: seconds since the current pass started."""
+        return (self.index - self._pass_start) / self.scenario.fps
+
+    def rewind(self) -> None:
+        """Start the scenario again at its first frame (to loop a finite scenario once `exhausted`): the
+        objects, light and gimbal schedule restart, frame indices and times keep counting (a servo loop's
+        clock never goes back), the renderer keeps its cache, the sensor noise goes on (not a bit-for-bit
+        replay). For an endless scenario the same people come again."""
+        self._pass_start = self.index
+
+    def objects_at(self, t: float) -> list[MovingObject]:
+        """The moving objects whose truth is reported at scene time t (s): all the scenario's paths, or the
+        endless script's objects present at t."""
+        return self.script.present(t) if self.script is not None else self.objects
 
     def background(self, gimbal: GimbalState | None = None) -> StereoFrame:
         """An empty-scene pair (no moving objects; foliage in its state at t = -1 s) at the given pose: what
@@ -163,16 +202,17 @@ class SimRig:
 
     def step(self, gimbal: GimbalState | None = None) -> SimFrame:
         """Render the next frame; `gimbal` overrides the scenario's schedule (closed loop)."""
-        i = self.index
+        i, ts = self.index, self.scene_t
         t = i / self.scenario.fps
-        g = gimbal if gimbal is not None else self.scenario.gimbal(t)
+        g = gimbal if gimbal is not None else self.scenario.gimbal(ts)
         R_wr = gimbal_rotation(g.pan_deg, g.tilt_deg)
-        moving = [o.surface(t, R_wr) for o in self.objects if o.visible(t)]
+        objects = self.objects_at(ts)
+        moving = [o.surface(ts, R_wr) for o in objects if o.visible(ts)]
         if self._foliage is not None:
             moving.append(self._foliage)
-        frame, ids = self.renderer.render(i, t, g, moving, self.scenario.gain(t))
-        truth = FrameTruth(t, g, tuple(self._truth(o.target_id, o.trajectory(t), R_wr, ids)
-                                       for o in self.objects), ids[0], ids[1])
+        gain = self.script.gain(ts) if self.script is not None else self.scenario.gain(ts)
+        frame, ids = self.renderer.render(i, t, g, moving, gain)
+        truth = FrameTruth(t, g, tuple(self._truth(o, ts, R_wr, ids) for o in objects), ids[0], ids[1])
         self.index += 1
         self.last_truth = truth
         return SimFrame(frame, truth)
@@ -184,7 +224,10 @@ class SimRig:
     def close(self) -> None:
         pass
 
-    def _truth(self, tid: int, world: F64, R_wr: F64, ids: list[NDArray[np.uint8]]) -> TargetTruth:
+    def _truth(self, obj: MovingObject, t: float, R_wr: F64, ids: list[NDArray[np.uint8]]) -> TargetTruth:
+        """Truth of one object at scene time t (s): its centre, projections, and its pixels' centroids and
+        areas in each image (ids: the (left, right) id images); visible fraction against area·(f/z)²."""
+        tid, world = obj.target_id, obj.trajectory(t)
         rig_p = R_wr.T @ world
         pl = self.rig.left.project(rig_p[None, :])[0]
         pr = self.rig.right.project(rig_p[None, :])[0]
@@ -200,6 +243,6 @@ class SimRig:
             areas[k] = int(m["m00"])
             cents.append(np.array([m["m10"] / m["m00"] + x0, m["m01"] / m["m00"] + y0])
                          if m["m00"] > 0 else None)
-        expected = np.pi * (self.rig.left.f * 0.3 / max(rig_p[2], 0.1)) ** 2
+        expected = obj.area_m2 * (self.rig.left.f / max(rig_p[2], 0.1)) ** 2
         return TargetTruth(tid, world, rig_p, pl, pr, cents[0], cents[1], areas[0],
                            min(areas[0] / expected, 1.0), areas[1])
