@@ -1,8 +1,9 @@
 """Render the simulated stereo rig: exact per-pixel ray casting of textured planes, with ground truth.
 
-The static scene is ray-cast once per gimbal pose and cached; each frame re-casts only the pixels inside
-the bounding boxes of moving things (targets, foliage), applies the illumination gain and adds sensor
-noise from a pre-drawn bank, so a 640x480 pair costs about a millisecond while the cameras are still.
+The static scene is rendered exactly for each gimbal pose (tracker.sim.static_cast: about 1 ms a camera
+at 640x480, so a moving gimbal costs little more than a still one) and the last few poses are cached; each
+frame re-casts only the pixels inside the bounding boxes of moving things (targets, foliage), applies the
+illumination gain and adds sensor noise from a pre-drawn bank.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from numpy.typing import NDArray
 from tracker.frames import GimbalState, StereoFrame
 from tracker.geometry import Camera, StereoRig, gimbal_rotation
 from tracker.sim.scene import Surface
+from tracker.sim.static_cast import StaticScene
 
 F64 = NDArray[np.float64]
 F32 = NDArray[np.float32]
@@ -183,6 +185,7 @@ class SimRenderer:
         self.rig = rig
         self.static = static
         self.views = (_make_view(rig.left), _make_view(rig.right))
+        self._scene = StaticScene([v.cam for v in self.views], static)
         self._cache: dict[tuple[float, float], tuple[list[U8], list[F32]]] = {}
         rng = np.random.default_rng(seed + 7919)
         w, h = rig.left.size
@@ -198,33 +201,40 @@ class SimRenderer:
         return np.maximum(n, 0).astype(np.uint8), np.maximum(-n, 0).astype(np.uint8)
 
     def _static(self, gimbal: GimbalState) -> tuple[list[U8], list[F32]]:
+        """The static scene at a gimbal pose, per camera: the image (H, W) uint8 and the inverse 1/z (1/m)
+        of each pixel's distance along the camera's axis, (H, W) float32 (about 1e-30 where nothing is
+        hit). Cached for the last 4 poses."""
         key = (round(gimbal.pan_deg, 6), round(gimbal.tilt_deg, 6))
         hit = self._cache.get(key)
         if hit is not None:
             return hit
         R_wr = gimbal_rotation(gimbal.pan_deg, gimbal.tilt_deg)
-        imgs, depths = [], []
-        for view in self.views:
-            w, h = view.cam.size
-            img = np.zeros((h, w), np.float32)
-            depth = np.full((h, w), np.inf, np.float32)
-            for surface in self.static:
-                _cast_plane_fast(view, R_wr, surface, img, depth)
-            imgs.append(np.clip(np.round(img), 0, 255).astype(np.uint8))
-            depths.append(depth)
+        imgs, invs = [], []
+        for k, view in enumerate(self.views):
+            img, inv_z, rest = self._scene.render(k, R_wr)
+            if rest:  # what the static renderer cannot take (discs, swaying, too near), cast per pixel
+                depth = view.ray_len / inv_z
+                for surface in rest:
+                    _cast_plane_fast(view, R_wr, surface, img, depth)
+                inv_z = view.ray_len / depth
+            imgs.append(img)
+            invs.append(inv_z)
         if len(self._cache) >= 4:
             self._cache.pop(next(iter(self._cache)))
-        self._cache[key] = (imgs, depths)
-        return imgs, depths
+        self._cache[key] = (imgs, invs)
+        return imgs, invs
 
     def static_depth(self, gimbal: GimbalState) -> list[F32]:
-        """Distance (m) along each pixel's ray to the static scene, per camera, (H, W) float32."""
-        return self._static(gimbal)[1]
+        """Distance (m) along each pixel's ray to the static scene, per camera, (H, W) float32, inf where
+        nothing is hit."""
+        with np.errstate(divide="ignore"):
+            return [np.where(inv > 1e-20, view.ray_len / inv, np.float32(np.inf))
+                    for view, inv in zip(self.views, self._static(gimbal)[1], strict=True)]
 
     def render(self, index: int, t: float, gimbal: GimbalState, moving: list[Surface], gain: float,
                noisy: bool = True) -> tuple[StereoFrame, list[U8]]:
         """Render one pair at time t (s). Returns the frame and the (left, right) id images."""
-        base_imgs, base_depths = self._static(gimbal)
+        base_imgs, base_invs = self._static(gimbal)
         R_wr = gimbal_rotation(gimbal.pan_deg, gimbal.tilt_deg)
         out: list[U8] = []
         ids_out: list[U8] = []
@@ -232,7 +242,7 @@ class SimRenderer:
             img8 = base_imgs[k].copy()
             ids = np.zeros(img8.shape, np.uint8)
             if moving:
-                self._cast_moving(k, R_wr, moving, t, img8, base_depths[k], ids)
+                self._cast_moving(k, R_wr, moving, t, img8, base_invs[k], ids)
             if gain != 1.0:
                 img8 = np.asarray(cv2.convertScaleAbs(img8, alpha=gain), np.uint8)
             if noisy:
@@ -246,18 +256,19 @@ class SimRenderer:
         return frame, ids_out
 
     def _cast_moving(self, k: int, R_wr: F64, moving: list[Surface], t: float, img8: U8,
-                     base_depth: F32, ids: U8) -> None:
-        """Cast moving surfaces into a copy of the static depth, only over their bounding boxes."""
+                     base_inv: F32, ids: U8) -> None:
+        """Cast moving surfaces over the static scene (base_inv: its inverse distances 1/z, (H, W)), only
+        over their bounding boxes: the static depth is filled in for the window around them all."""
         view = self.views[k]
         cast = [(s, b) for s, b in ((s, _pixel_box(view, s.corners() @ R_wr)) for s in moving) if b is not None]
         self.windows[k] = None
         if not cast:
             return
-        depth = self._depth[k]
-        np.copyto(depth, base_depth)
-        for s, b in cast:
-            _cast_plane_fast(view, R_wr, s, img8, depth, t, ids, b)
         boxes = [b for _, b in cast]
         x0, y0 = min(b[0] for b in boxes), min(b[1] for b in boxes)
         x1, y1 = max(b[2] for b in boxes), max(b[3] for b in boxes)
+        depth = self._depth[k]  # valid inside the window only
+        np.divide(view.ray_len[y0:y1, x0:x1], base_inv[y0:y1, x0:x1], out=depth[y0:y1, x0:x1])
+        for s, b in cast:
+            _cast_plane_fast(view, R_wr, s, img8, depth, t, ids, b)
         self.windows[k] = (x0, y0, x1, y1)
