@@ -21,7 +21,7 @@ from tracker.frames import FrameSource, GimbalState, StereoFrame
 from tracker.geometry import StereoRig, load_rig
 from tracker.pipeline import Pipeline
 from tracker.servo import ServoError, SimulatedGimbal, open_servo
-from tracker.servo.base import ServoDriver
+from tracker.servo.base import AxisLimits, ServoDriver
 from tracker.sim.scenarios import SimFrame, SimRig, get_scenario
 
 
@@ -122,7 +122,7 @@ def _compose_sim(cfg: RuntimeConfig, tuning: TrackerTuning, rig: StereoRig | Non
     except ValueError as exc:
         raise ComposeError(str(exc)) from None
     raw = SimRig(scenario, seed=cfg.seed)
-    sim: SimRig | LoopingSim = LoopingSim(raw) if cfg.loop_source and scenario.frames is not None else raw
+    sim: SimRig | LoopingSim = LoopingSim(raw) if cfg.loop_source and not scenario.endless else raw
     rig = rig or raw.rig
     pipe = _pipeline(rig, cfg, tuning, scenario.fps)
     driver = _open_driver(cfg)
@@ -133,7 +133,7 @@ def _compose_sim(cfg: RuntimeConfig, tuning: TrackerTuning, rig: StereoRig | Non
             pan, tilt = mount_range(scenario)
             widen_background(pipe, *background_range(pan, tilt, rig.left.size, pipe.rect.f))
             poses = survey_grid(pan, tilt)
-            controller = _controller(pipe, tuning)
+            controller = _controller(pipe, tuning, (pan, tilt))
             source = ServoSimSource(sim, driver, lambda: controller.setpoint)  # type: ignore[arg-type]
             loop = _loop(pipe, controller, driver)
         else:
@@ -185,8 +185,16 @@ def _open_driver(cfg: RuntimeConfig) -> ServoDriver | None:
         raise ComposeError(str(exc)) from None
 
 
-def _controller(pipe: Pipeline, tuning: TrackerTuning) -> AimController:
-    return AimController(replace(tuning.aim, frame_width_px=pipe.rig.left.size[0], focal_px=pipe.rect.f))
+def _controller(pipe: Pipeline, tuning: TrackerTuning,
+                mount: tuple[tuple[float, float], tuple[float, float]] | None = None) -> AimController:
+    """The aim controller; `mount` (pan, tilt ranges in degrees) narrows its limits to the range whose
+    background was surveyed (beyond it every pixel would look new)."""
+    cfg = replace(tuning.aim, frame_width_px=pipe.rig.left.size[0], focal_px=pipe.rect.f)
+    if mount is not None:
+        (p0, p1), (t0, t1) = mount
+        cfg = replace(cfg, pan_limits=AxisLimits(max(p0, cfg.pan_limits.min_deg), min(p1, cfg.pan_limits.max_deg)),
+                      tilt_limits=AxisLimits(max(t0, cfg.tilt_limits.min_deg), min(t1, cfg.tilt_limits.max_deg)))
+    return AimController(cfg)
 
 
 def _loop(pipe: Pipeline, controller: AimController, driver: ServoDriver) -> ServoLoop:

@@ -176,6 +176,8 @@ class Runtime:
             new.pipeline.learn_background(self.latest.frame)
         comp.rig, comp.pipeline, comp.loop = new.rig, new.pipeline, new.loop
         self.generation += 1
+        if self.servo is not None and comp.controller is not None:
+            self.servo.controller = comp.controller
 
     # --- status --------------------------------------------------------------------------------------
     def status(self) -> dict[str, Any]:
@@ -292,7 +294,7 @@ class Runtime:
         if sim is not None:
             if hasattr(sim, "skip"):
                 sim.skip(n)
-            elif sim.scenario.frames is None:
+            elif sim.scenario.endless:
                 sim.index += n
             else:
                 sim.index = min(sim.index + n, sim.scenario.frames)
@@ -350,6 +352,7 @@ def _apply_tuning(comp: Composition, tuning: TrackerTuning) -> None:
     pipe.tracker.cfg = tuning.tracks
     if comp.controller is not None:
         old = comp.controller.config
-        comp.controller.config = replace(tuning.aim, frame_width_px=old.frame_width_px, focal_px=old.focal_px)
+        comp.controller.config = replace(tuning.aim, frame_width_px=old.frame_width_px, focal_px=old.focal_px,
+                                         pan_limits=old.pan_limits, tilt_limits=old.tilt_limits)
 
 
