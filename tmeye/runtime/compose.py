@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from tmeye.runtime.config import RuntimeConfig, TrackerTuning
-from tracker.aim import AimController
+from tracker.aim import AimConfig, AimController
 from tracker.closedloop import LoopConfig, ServoLoop, ServoSimSource, background_range, survey_grid, widen_background
 from tracker.closedloop_eval import closed_loop_imm, mount_range
 from tracker.evaluation import survey_poses
@@ -89,6 +89,7 @@ class Composition:
     driver: ServoDriver | None
     sim: SimRig | LoopingSim | None
     fps: float
+    track_limits: tuple[AxisLimits, AxisLimits] | None = None  # (pan, tilt) for automatic tracking
 
     def close(self) -> None:
         try:
@@ -128,12 +129,14 @@ def _compose_sim(cfg: RuntimeConfig, tuning: TrackerTuning, rig: StereoRig | Non
     driver = _open_driver(cfg)
     source: FrameSource = sim
     loop = controller = None
+    track_limits = None
     try:
         if driver is not None:
             pan, tilt = mount_range(scenario)
             widen_background(pipe, *background_range(pan, tilt, rig.left.size, pipe.rect.f))
             poses = survey_grid(pan, tilt)
-            controller = _controller(pipe, tuning, (pan, tilt))
+            controller = _controller(pipe, tuning)
+            track_limits = tracking_limits(controller.config, (pan, tilt))
             source = ServoSimSource(sim, driver, lambda: controller.setpoint)  # type: ignore[arg-type]
             loop = _loop(pipe, controller, driver)
         else:
@@ -144,7 +147,7 @@ def _compose_sim(cfg: RuntimeConfig, tuning: TrackerTuning, rig: StereoRig | Non
         if driver is not None:
             driver.close()
         raise
-    return Composition(cfg, rig, source, pipe, loop, controller, driver, sim, scenario.fps)
+    return Composition(cfg, rig, source, pipe, loop, controller, driver, sim, scenario.fps, track_limits)
 
 
 def _compose_real(cfg: RuntimeConfig, tuning: TrackerTuning, rig: StereoRig | None) -> Composition:
@@ -185,16 +188,17 @@ def _open_driver(cfg: RuntimeConfig) -> ServoDriver | None:
         raise ComposeError(str(exc)) from None
 
 
-def _controller(pipe: Pipeline, tuning: TrackerTuning,
-                mount: tuple[tuple[float, float], tuple[float, float]] | None = None) -> AimController:
-    """The aim controller; `mount` (pan, tilt ranges in degrees) narrows its limits to the range whose
-    background was surveyed (beyond it every pixel would look new)."""
-    cfg = replace(tuning.aim, frame_width_px=pipe.rig.left.size[0], focal_px=pipe.rect.f)
-    if mount is not None:
-        (p0, p1), (t0, t1) = mount
-        cfg = replace(cfg, pan_limits=AxisLimits(max(p0, cfg.pan_limits.min_deg), min(p1, cfg.pan_limits.max_deg)),
-                      tilt_limits=AxisLimits(max(t0, cfg.tilt_limits.min_deg), min(t1, cfg.tilt_limits.max_deg)))
-    return AimController(cfg)
+def _controller(pipe: Pipeline, tuning: TrackerTuning) -> AimController:
+    return AimController(replace(tuning.aim, frame_width_px=pipe.rig.left.size[0], focal_px=pipe.rect.f))
+
+
+def tracking_limits(aim: AimConfig, mount: tuple[tuple[float, float], tuple[float, float]]
+                    ) -> tuple[AxisLimits, AxisLimits]:
+    """The mechanical limits narrowed to the (pan, tilt) ranges in degrees whose background was surveyed:
+    automatic tracking stays there (beyond it every pixel would look new); the operator may go anywhere."""
+    (p0, p1), (t0, t1) = mount
+    return (AxisLimits(max(p0, aim.pan_limits.min_deg), min(p1, aim.pan_limits.max_deg)),
+            AxisLimits(max(t0, aim.tilt_limits.min_deg), min(t1, aim.tilt_limits.max_deg)))
 
 
 def _loop(pipe: Pipeline, controller: AimController, driver: ServoDriver) -> ServoLoop:

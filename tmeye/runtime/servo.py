@@ -7,7 +7,7 @@ Angles in degrees (gimbal convention of tracker.geometry: pan + right, tilt + up
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from enum import StrEnum
 
 from tracker.aim import AimController
@@ -46,21 +46,26 @@ def check_angles(pan_deg: float, tilt_deg: float, pan: AxisLimits, tilt: AxisLim
 class ServoControl:
     """The operator's wishes applied to an AimController (whose manual mode does the rate-limited motion)."""
 
-    def __init__(self, controller: AimController):
+    def __init__(self, controller: AimController, track_limits: tuple[AxisLimits, AxisLimits] | None = None):
+        """track_limits: (pan, tilt) limits in auto mode (the surveyed range); the operator's commands
+        honour the mount's own limits, those the controller was built with."""
         self.controller = controller
+        c = controller.config
+        self.limits: tuple[AxisLimits, AxisLimits] = (c.pan_limits, c.tilt_limits)
+        self.track_limits = track_limits or self.limits
         self.mode = ServoMode.AUTO
         self.goal: tuple[float, float] | None = None
         self._jog: Jog | None = None
+        self._use(self.track_limits)
 
-    @property
-    def limits(self) -> tuple[AxisLimits, AxisLimits]:
-        c = self.controller.config
-        return c.pan_limits, c.tilt_limits
+    def _use(self, limits: tuple[AxisLimits, AxisLimits]) -> None:
+        self.controller.config = replace(self.controller.config, pan_limits=limits[0], tilt_limits=limits[1])
 
     def set_mode(self, mode: ServoMode) -> None:
         c = self.controller
         self._jog = None
         if mode is ServoMode.AUTO:
+            self._use(self.track_limits)
             c.resume_auto()
             self.goal = None
         elif mode is ServoMode.HOME:
@@ -97,5 +102,6 @@ class ServoControl:
             self._jog = None
 
     def _manual(self, goal: tuple[float, float]) -> None:
+        self._use(self.limits)
         self.goal = goal
         self.controller.set_manual(*goal)

@@ -110,7 +110,7 @@ class Runtime:
             self.state, self.error = "failed", str(exc)
             raise
         if self.comp.controller is not None:
-            self.servo = ServoControl(self.comp.controller)
+            self.servo = ServoControl(self.comp.controller, self.comp.track_limits)
         self._thread = threading.Thread(target=self._run, name="tmeye-runtime", daemon=True)
         self.state = "running"
         self._thread.start()
