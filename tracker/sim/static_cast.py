@@ -8,13 +8,11 @@ pixel, so they are evaluated exactly on a grid of nodes every STEP pixels and in
 cv2.resize) in between: the only error is the curvature of the lens undistortion over a 4-px cell, below
 0.003 texel and 2e-5 relative depth at 640x480 (cv2.remap itself rounds texture coordinates to 1/32 texel).
 
-Cells through which an edge of a surface could pass, or whose corners see different nearest surfaces, are
-cast per pixel instead. A surface is hit where its four edge functions (linear in m, see _edge_rows) are
-all >= 0; over a cell they take their extremes at its corners (up to the bow of the cell's sides in m,
-far below the margin _KAPPA), so a cell is decided at its corners: inside a surface, outside it (beyond
-one edge at all four corners), or behind the nearest surface at all four (W is linear too). Each surface
-is only evaluated over the nodes of its own bounding box. All textures share one atlas, so one cv2.remap
-textures the whole image.
+Which surface is nearest can only change across the image of a rectangle's edge or of the line where two
+rectangles cross (fixed 3-D segments, _segments). Cells such a segment may pass through are found by
+sampling its projection (_edge_cells) and cast per pixel by the reference's rule (_nearest); every other
+cell sees one surface, found once per run of such cells along a row (_labels). All textures share one
+atlas, so one cv2.remap textures the whole image.
 
 Surfaces this cannot take (discs, swaying ones, planes within 10 cm of a camera) are returned to the
 caller to cast per pixel over the result (z-tested).
@@ -36,14 +34,11 @@ F32 = NDArray[np.float32]
 U8 = NDArray[np.uint8]
 I64 = NDArray[np.int64]
 B = NDArray[np.bool_]
-Box = tuple[int, int, int, int]  # node rows i0:i1, columns j0:j1
 
 STEP = 4  # node spacing (pixels); must be even
 _PAD = 2  # atlas border around each texture (texels), reflect-101 like the reference's cv2.remap border
-_KAPPA = 2e-5  # margin of the cell tests in normalised units (0.01 px): bounds the bow of a cell's sides
 _NO_HIT = (-8e-30, -8e-30, 1e-30)  # (X, Y, W) where no surface is hit: outside the atlas, ~1e30 m away
 _NEAR_Z = 1e-3  # camera-frame z (m) where a surface's outline is cut before it is projected
-_CORNERS = np.ones((2, 2), np.uint8)
 
 
 def _fits_atlas(s: Surface) -> bool:
@@ -212,8 +207,8 @@ def _edge_cells(grid: _Grid, cam: Camera, R_wr: F64, seg: F64) -> B:
                                   np.repeat(ma[:, 1], n) + np.repeat(d[:, 1], n) * t)
     ny, nx = grid.shape
     off = (STEP + 1) / 2  # node j at image pixel STEP·j - off; cell j between nodes j and j+1
-    j = np.clip(np.floor((u + off) / STEP), 0, nx - 2).astype(np.intp)
-    i = np.clip(np.floor((v + off) / STEP), 0, ny - 2).astype(np.intp)
+    j = np.clip(((u + off) * (1.0 / STEP)).astype(np.intp), 0, nx - 2)  # truncation: floor where >= 0
+    i = np.clip(((v + off) * (1.0 / STEP)).astype(np.intp), 0, ny - 2)
     marks = np.zeros((ny - 1, nx - 1), bool)
     marks[i, j] = True
     return marks
@@ -223,26 +218,27 @@ def _nearest(H: F64, centre: F64, half: F64, x: F32, y: F32) -> tuple[NDArray[np
     """The rule of the per-pixel reference at N points (x_n, y_n): the nearest surface hit (texture
     coordinates within half (S, 2) texels of its centre (S, 2), inclusive; in front of the camera; the first
     of equally near ones), (N,) (-1 for none), and its (X, Y, W), (3, N) float32 (_NO_HIT where none is).
-    In float64 and about each texture's centre: a pixel 1e-5 texel off an edge falls on the right side."""
+    About each texture's centre, so that float32 decides the side of an edge to within 1e-5 texel."""
     S, n = len(H), len(x)
-    Hl = H.copy()[..., None]
-    Hl[:, :2] -= centre[:, :, None, None] * H[:, 2:, :, None]  # (X - cx W, Y - cy W, W)
-    xd, yd = x.astype(np.float64), y.astype(np.float64)
-    hom = Hl[:, :, 0] * xd  # (S, 3, N)
-    hom += Hl[:, :, 1] * yd
-    hom += Hl[:, :, 2]
+    Hl = H.copy()
+    Hl[:, :2] -= centre[:, :, None] * H[:, 2:]  # (X - cx W, Y - cy W, W)
+    Hl32 = Hl.astype(np.float32)[..., None]
+    hom = Hl32[:, :, 0] * x  # (S, 3, N)
+    hom += Hl32[:, :, 1] * y
+    hom += Hl32[:, :, 2]
     Xl, Yl, W = hom[:, 0], hom[:, 1], hom[:, 2]
-    hit = (W > 0) & (np.abs(Xl) <= half[:, :1] * W) & (np.abs(Yl) <= half[:, 1:] * W)
-    Wm = np.where(hit, W, -np.inf)
+    half32 = half.astype(np.float32)
+    hit = (W > 0) & (np.abs(Xl) <= half32[:, :1] * W) & (np.abs(Yl) <= half32[:, 1:] * W)
+    Wm = np.where(hit, W, np.float32(-np.inf))
     best = Wm.max(axis=0)
     lab = np.full(n, -1, np.intp)
     for s in range(S - 1, -1, -1):
         lab[Wm[s] == best] = s
     lab[best == -np.inf] = -1
-    pick = np.maximum(lab, 0) * (3 * n) + np.arange(n)
+    k = np.maximum(lab, 0)
+    pick = k * (3 * n) + np.arange(n)
     out = np.array([np.take(hom, pick + r * n) for r in range(3)])
-    out[:2] += np.take(centre.T, np.maximum(lab, 0), axis=1) * out[2]
-    out = out.astype(np.float32)
+    out[:2] += np.take(centre.T.astype(np.float32), k, axis=1) * out[2]
     out[:, lab < 0] = np.array(_NO_HIT, np.float32)[:, None]
     return lab, out
 
@@ -257,12 +253,12 @@ def _labels(grid: _Grid, exact: B, H: F64, centre: F64, half: F64) -> tuple[NDAr
     free = np.zeros((ny - 1, nx), bool)
     free[:, :-1] = ~exact  # a False column ends each row's runs
     f = free.ravel()
-    start = f & ~np.concatenate([[False], f[:-1]])
-    i, j = np.divmod(np.flatnonzero(start), nx)
+    edge = np.flatnonzero(np.diff(f, prepend=False, append=False))  # run starts and ends, alternating
+    i, j = np.divmod(edge[::2], nx)
     first = grid.cell_first[i, j]
     seed = _nearest(H, centre, half, np.take(grid.xy_pad[0], first), np.take(grid.xy_pad[1], first))[0]
     cell = np.full(f.size, -2, np.int16)
-    cell[f] = seed[np.cumsum(start)[f] - 1]
+    cell[f] = np.repeat(seed, edge[1::2] - edge[::2])
     pad = np.full((ny + 1, nx + 1), -2, np.int16)
     pad[1:-1, 1:-1] = cell.reshape(ny - 1, nx)[:, :-1]
     hi_lab = np.maximum(np.maximum(pad[:-1, :-1], pad[:-1, 1:]), np.maximum(pad[1:, :-1], pad[1:, 1:]))
@@ -278,16 +274,17 @@ def _labels(grid: _Grid, exact: B, H: F64, centre: F64, half: F64) -> tuple[NDAr
 
 def _node_values(grid: _Grid, node: NDArray[np.int16], H: F64) -> F32:
     """(X, Y, W) (3, ny, nx) float32 at the nodes of the surface given at each (node (ny, nx); -1 or less:
-    _NO_HIT)."""
-    table = np.concatenate([H, np.zeros((1, 3, 3))]).astype(np.float32)  # row S: _NO_HIT
-    table[-1, :, 2] = _NO_HIT
-    k = np.where(node < 0, len(H), node)
+    _NO_HIT), each coefficient looked up by cv2.LUT."""
+    table = np.zeros((3, 3, 256), np.float32)  # [row, coefficient, surface]; 255: _NO_HIT
+    table[:, :, :len(H)] = H.transpose(1, 2, 0)
+    table[:, 2, 255] = _NO_HIT
+    k = np.where(node < 0, 255, node).astype(np.uint8)
     x, y = grid.nodes
     out = np.empty((3,) + node.shape, np.float32)
     for r in range(3):
-        np.multiply(np.take(table[:, r, 0], k), x, out=out[r])
-        out[r] += np.take(table[:, r, 1], k) * y
-        out[r] += np.take(table[:, r, 2], k)
+        np.multiply(cv2.LUT(k, table[r, 0]), x, out=out[r])
+        out[r] += cv2.LUT(k, table[r, 1]) * y
+        out[r] += cv2.LUT(k, table[r, 2])
     return out
 
 
@@ -326,6 +323,7 @@ class StaticScene:
         for c in range(3):
             full[c][idx] = vals[c]
         X, Y, W = full.reshape(3, ny * STEP, nx * STEP)[:, STEP:STEP + h, STEP:STEP + w]
-        img = cv2.remap(self._atlas, cv2.divide(X, W), cv2.divide(Y, W), cv2.INTER_LINEAR,
-                        borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+        cv2.divide(X, W, dst=X)  # in place: texture coordinates, the maps of the remap
+        cv2.divide(Y, W, dst=Y)
+        img = cv2.remap(self._atlas, X, Y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
         return np.asarray(img, np.uint8), W, rest
