@@ -218,17 +218,19 @@ def _nearest(H: F64, centre: F64, half: F64, x: F32, y: F32) -> tuple[NDArray[np
     """The rule of the per-pixel reference at N points (x_n, y_n): the nearest surface hit (texture
     coordinates within half (S, 2) texels of its centre (S, 2), inclusive; in front of the camera; the first
     of equally near ones), (N,) (-1 for none), and its (X, Y, W), (3, N) float32 (_NO_HIT where none is).
-    About each texture's centre, so that float32 decides the side of an edge to within 1e-5 texel."""
+    About each texture's centre and in units of its half extent, so that float32 decides the side of an
+    edge to within 1e-5 texel: hit where |X'| <= W and |Y'| <= W (which imply W >= 0)."""
     S, n = len(H), len(x)
-    Hl = H.copy()
-    Hl[:, :2] -= centre[:, :, None] * H[:, 2:]  # (X - cx W, Y - cy W, W)
-    Hl32 = Hl.astype(np.float32)[..., None]
-    hom = Hl32[:, :, 0] * x  # (S, 3, N)
-    hom += Hl32[:, :, 1] * y
-    hom += Hl32[:, :, 2]
-    Xl, Yl, W = hom[:, 0], hom[:, 1], hom[:, 2]
-    half32 = half.astype(np.float32)
-    hit = (W > 0) & (np.abs(Xl) <= half32[:, :1] * W) & (np.abs(Yl) <= half32[:, 1:] * W)
+    Hs = H.copy()
+    Hs[:, :2] -= centre[:, :, None] * H[:, 2:]  # (X - cx W, Y - cy W, W)
+    Hs[:, :2] /= half[:, :, None]
+    H32 = Hs.astype(np.float32)[..., None]
+    hom = H32[:, :, 0] * x  # (S, 3, N)
+    hom += H32[:, :, 1] * y
+    hom += H32[:, :, 2]
+    W = hom[:, 2]
+    hit = np.abs(hom[:, 0]) <= W
+    hit &= np.abs(hom[:, 1]) <= W
     Wm = np.where(hit, W, np.float32(-np.inf))
     best = Wm.max(axis=0)
     lab = np.full(n, -1, np.intp)
@@ -238,38 +240,40 @@ def _nearest(H: F64, centre: F64, half: F64, x: F32, y: F32) -> tuple[NDArray[np
     k = np.maximum(lab, 0)
     pick = k * (3 * n) + np.arange(n)
     out = np.array([np.take(hom, pick + r * n) for r in range(3)])
+    out[:2] *= np.take(half.T.astype(np.float32), k, axis=1)
     out[:2] += np.take(centre.T.astype(np.float32), k, axis=1) * out[2]
     out[:, lab < 0] = np.array(_NO_HIT, np.float32)[:, None]
     return lab, out
 
 
-def _labels(grid: _Grid, exact: B, H: F64, centre: F64, half: F64) -> tuple[NDArray[np.int16], B]:
-    """The surface nearest at each node of the cells not cast per pixel (-1 for none; -2 at nodes only
-    of cells cast per pixel), (ny, nx), and the cells to cast per pixel, (ny-1, nx-1): `exact` and the
-    cells around a node where they disagree. No segment separates the pixels of a cell, or of two cells
-    side by side, so a run of cells along a row sees one surface, the nearest at its first pixel; only two
-    cells that meet at a corner may see different ones."""
+def _runs(grid: _Grid, exact: B) -> tuple[B, I64, I64]:
+    """The runs of cells not cast per pixel along each row of cells: which cells are in one, (ny-1)·nx
+    flat with a column ending each row, and each run's first pixel (flat padded index) and length."""
     ny, nx = grid.shape
     free = np.zeros((ny - 1, nx), bool)
-    free[:, :-1] = ~exact  # a False column ends each row's runs
+    free[:, :-1] = ~exact
     f = free.ravel()
     edge = np.flatnonzero(np.diff(f, prepend=False, append=False))  # run starts and ends, alternating
     i, j = np.divmod(edge[::2], nx)
-    first = grid.cell_first[i, j]
-    seed = _nearest(H, centre, half, np.take(grid.xy_pad[0], first), np.take(grid.xy_pad[1], first))[0]
+    return f, grid.cell_first[i, j], edge[1::2] - edge[::2]
+
+
+def _spread(grid: _Grid, f: B, seed: NDArray[np.intp], length: I64) -> tuple[NDArray[np.int16], B]:
+    """The surface nearest at each node (ny, nx) of the cells not cast per pixel (-1 for none; -2 at nodes
+    only of cells cast per pixel), given each run's (seed), and the cells (ny-1, nx-1) around a node where
+    they disagree, to cast per pixel too. No segment separates the pixels of a cell, or of two cells side
+    by side, so a run sees one surface; only two cells that meet at a corner may see different ones."""
+    ny, nx = grid.shape
     cell = np.full(f.size, -2, np.int16)
-    cell[f] = np.repeat(seed, edge[1::2] - edge[::2])
+    cell[f] = np.repeat(seed, length)
     pad = np.full((ny + 1, nx + 1), -2, np.int16)
     pad[1:-1, 1:-1] = cell.reshape(ny - 1, nx)[:, :-1]
     hi_lab = np.maximum(np.maximum(pad[:-1, :-1], pad[:-1, 1:]), np.maximum(pad[1:, :-1], pad[1:, 1:]))
     pad[pad == -2] = np.iinfo(np.int16).max
     lo_lab = np.minimum(np.minimum(pad[:-1, :-1], pad[:-1, 1:]), np.minimum(pad[1:, :-1], pad[1:, 1:]))
     clash = (lo_lab != hi_lab) & (hi_lab > -2)
-    if clash.any():
-        c = clash[:-1, :-1] | clash[1:, :-1] | clash[:-1, 1:] | clash[1:, 1:]
-        exact = exact | c
-        hi_lab[clash] = -2
-    return hi_lab, exact
+    hi_lab[clash] = -2
+    return hi_lab, clash[:-1, :-1] | clash[1:, :-1] | clash[:-1, 1:] | clash[1:, 1:]
 
 
 def _node_values(grid: _Grid, node: NDArray[np.int16], H: F64) -> F32:
@@ -312,14 +316,24 @@ class StaticScene:
         rest = [s for s in self.surfaces if not _fits_atlas(s) or id(s) in too_near]
         if near.all():
             return np.zeros((h, w), np.uint8), np.full((h, w), _NO_HIT[2], np.float32), rest
-        H, centre, half = H[~near], p.centre[~near], p.half[~near]
-        node, exact = _labels(grid, _edge_cells(grid, cam, R_wr, p.segments), H, centre, half)
+        centre, half = p.centre, p.half
+        if near.any():
+            H, centre, half = H[~near], centre[~near], half[~near]
+        exact = _edge_cells(grid, cam, R_wr, p.segments)
+        f, first, length = _runs(grid, exact)
+        idx = (grid.cell_first[exact][:, None] + grid.block[None, :]).ravel()
+        pts = np.concatenate([first, idx])  # each run's first pixel, then the cells cast per pixel
+        lab, vals = _nearest(H, centre, half, np.take(grid.xy_pad[0], pts), np.take(grid.xy_pad[1], pts))
+        node, more = _spread(grid, f, lab[:len(first)], length)
+        vals = vals[:, len(first):]
+        if more.any():
+            extra = (grid.cell_first[more & ~exact][:, None] + grid.block[None, :]).ravel()
+            idx = np.concatenate([idx, extra])
+            vals = np.hstack([vals, _nearest(H, centre, half, grid.xy_pad[0][extra], grid.xy_pad[1][extra])[1]])
         nodes = _node_values(grid, node, H)
         ny, nx = grid.shape
         full = np.asarray(cv2.resize(nodes.reshape(3 * ny, nx), (nx * STEP, 3 * ny * STEP),
                                      interpolation=cv2.INTER_LINEAR)).reshape(3, -1)
-        idx = (grid.cell_first[exact][:, None] + grid.block[None, :]).ravel()
-        vals = _nearest(H, centre, half, np.take(grid.xy_pad[0], idx), np.take(grid.xy_pad[1], idx))[1]
         for c in range(3):
             full[c][idx] = vals[c]
         X, Y, W = full.reshape(3, ny * STEP, nx * STEP)[:, STEP:STEP + h, STEP:STEP + w]
