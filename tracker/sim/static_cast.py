@@ -92,12 +92,23 @@ def _crossing(a: Surface, b: Surface) -> tuple[F64, F64] | None:
     return (p0 + lo * d, p0 + hi * d) if lo <= hi else None
 
 
+def _on(p: F64, a: F64, b: F64) -> bool:
+    """Whether point p lies on the segment from a to b (to within a micrometre)."""
+    d = b - a
+    t = float(np.clip((p - a) @ d / max(float(d @ d), 1e-300), 0.0, 1.0))
+    return bool(np.linalg.norm(a + t * d - p) < 1e-6)
+
+
 def _segments(surfaces: list[Surface]) -> F64:
     """Where the nearest surface can change, (K, 2, 3) segments (world, metres): the rectangles' edges and
-    the segments where two of them cross."""
+    the segments where two of them cross, without those that lie on another (a plane standing on the
+    ground meets it along its own bottom edge)."""
     segs = [(c[i], c[(i + 1) % 4]) for c in (s.corners() for s in surfaces) for i in range(4)]
     segs += [x for i, a in enumerate(surfaces) for b in surfaces[i + 1:] if (x := _crossing(a, b)) is not None]
-    return np.array(segs, np.float64).reshape(-1, 2, 3)
+    keep = [(a, b) for i, (a, b) in enumerate(segs)
+            if not any(_on(a, *o) and _on(b, *o) and (j < i or not (_on(o[0], a, b) and _on(o[1], a, b)))
+                       for j, o in enumerate(segs) if j != i)]
+    return np.array(keep, np.float64).reshape(-1, 2, 3)
 
 
 @dataclass(frozen=True)
