@@ -257,6 +257,14 @@ def _nearest(H: F64, centre: F64, half: F64, x: F32, y: F32) -> tuple[NDArray[np
     return lab, out
 
 
+def _surface_values(H: F64, lab: NDArray[np.int16], x: F32, y: F32) -> F32:
+    """(X, Y, W) (3, N) float32 of surface lab (N,) at points (x_n, y_n) (_NO_HIT where lab < 0)."""
+    table = np.concatenate([H, np.zeros((1, 3, 3))]).astype(np.float32)  # row S: _NO_HIT
+    table[-1, :, 2] = _NO_HIT
+    coef = table[np.where(lab < 0, len(H), lab)]  # (N, 3, 3)
+    return np.ascontiguousarray((coef[..., 0] * x[:, None] + coef[..., 1] * y[:, None] + coef[..., 2]).T)
+
+
 def _runs(grid: _Grid, exact: B) -> tuple[B, I64, I64]:
     """The runs of cells not cast per pixel along each row of cells: which cells are in one, (ny-1)·nx
     flat with a column ending each row, and each run's first pixel (flat padded index) and length."""
@@ -269,22 +277,23 @@ def _runs(grid: _Grid, exact: B) -> tuple[B, I64, I64]:
     return f, grid.cell_first[i, j], edge[1::2] - edge[::2]
 
 
-def _spread(grid: _Grid, f: B, seed: NDArray[np.intp], length: I64) -> tuple[NDArray[np.int16], B]:
-    """The surface nearest at each node (ny, nx) of the cells not cast per pixel (-1 for none; -2 at nodes
-    only of cells cast per pixel), given each run's (seed), and the cells (ny-1, nx-1) around a node where
-    they disagree, to cast per pixel too. No segment separates the pixels of a cell, or of two cells side
-    by side, so a run sees one surface; only two cells that meet at a corner may see different ones."""
+def _spread(grid: _Grid, f: B, seed: NDArray[np.intp], length: I64) -> tuple[NDArray[np.int16], B, NDArray[np.int16]]:
+    """Given each run's surface (seed): the surface nearest at each node (ny, nx) of the cells not cast per
+    pixel (-1 for none; -2 at nodes only of cells cast per pixel), the cells (ny-1, nx-1) around a node
+    where they disagree, which cannot be interpolated, and each cell's surface (ny-1, nx-1) (-2: cast per
+    pixel). No segment separates the pixels of a cell, or of two cells side by side, so a run sees one
+    surface; only two cells that meet at a corner may see different ones."""
     ny, nx = grid.shape
     cell = np.full(f.size, -2, np.int16)
     cell[f] = np.repeat(seed, length)
     pad = np.full((ny + 1, nx + 1), -2, np.int16)
     pad[1:-1, 1:-1] = cell.reshape(ny - 1, nx)[:, :-1]
     hi_lab = np.maximum(np.maximum(pad[:-1, :-1], pad[:-1, 1:]), np.maximum(pad[1:, :-1], pad[1:, 1:]))
-    pad[pad == -2] = np.iinfo(np.int16).max
-    lo_lab = np.minimum(np.minimum(pad[:-1, :-1], pad[:-1, 1:]), np.minimum(pad[1:, :-1], pad[1:, 1:]))
+    big = np.where(pad == -2, np.iinfo(np.int16).max, pad).astype(np.int16)
+    lo_lab = np.minimum(np.minimum(big[:-1, :-1], big[:-1, 1:]), np.minimum(big[1:, :-1], big[1:, 1:]))
     clash = (lo_lab != hi_lab) & (hi_lab > -2)
     hi_lab[clash] = -2
-    return hi_lab, clash[:-1, :-1] | clash[1:, :-1] | clash[:-1, 1:] | clash[1:, 1:]
+    return hi_lab, clash[:-1, :-1] | clash[1:, :-1] | clash[:-1, 1:] | clash[1:, 1:], pad[1:-1, 1:-1]
 
 
 def _node_values(grid: _Grid, node: NDArray[np.int16], H: F64) -> F32:
@@ -335,12 +344,14 @@ class StaticScene:
         idx = (grid.cell_first[exact][:, None] + grid.block[None, :]).ravel()
         pts = np.concatenate([first, idx])  # each run's first pixel, then the cells cast per pixel
         lab, vals = _nearest(H, centre, half, np.take(grid.xy_pad[0], pts), np.take(grid.xy_pad[1], pts))
-        node, more = _spread(grid, f, lab[:len(first)], length)
+        node, more, cell = _spread(grid, f, lab[:len(first)], length)
         vals = vals[:, len(first):]
-        if more.any():
-            extra = (grid.cell_first[more & ~exact][:, None] + grid.block[None, :]).ravel()
+        more &= ~exact
+        if more.any():  # cells that see one surface but whose nodes do not: that surface at each pixel
+            extra = (grid.cell_first[more][:, None] + grid.block[None, :]).ravel()
             idx = np.concatenate([idx, extra])
-            vals = np.hstack([vals, _nearest(H, centre, half, grid.xy_pad[0][extra], grid.xy_pad[1][extra])[1]])
+            vals = np.hstack([vals, _surface_values(H, np.repeat(cell[more], STEP * STEP),
+                                                    grid.xy_pad[0][extra], grid.xy_pad[1][extra])])
         nodes = _node_values(grid, node, H)
         ny, nx = grid.shape
         full = np.asarray(cv2.resize(nodes.reshape(3 * ny, nx), (nx * STEP, 3 * ny * STEP),
