@@ -242,11 +242,11 @@ def _nearest(H: F64, centre: F64, half: F64, x: F32, y: F32) -> tuple[NDArray[np
     W = hom[:, 2]
     hit = np.abs(hom[:, 0]) <= W
     hit &= np.abs(hom[:, 1]) <= W
-    Wm = np.where(hit, W, np.float32(-np.inf))
-    best = Wm.max(axis=0)
+    np.copyto(W, np.float32(-np.inf), where=~hit)  # W of what is not hit: never the nearest
+    best = W.max(axis=0)
     lab = np.full(n, -1, np.intp)
     for s in range(S - 1, -1, -1):
-        lab[Wm[s] == best] = s
+        lab[W[s] == best] = s
     lab[best == -np.inf] = -1
     k = np.maximum(lab, 0)
     pick = k * (3 * n) + np.arange(n)
