@@ -123,6 +123,11 @@ def _cast_plane_fast(view: _View, R_wr: F64, s: Surface, img: F32 | U8, depth: F
         ids[y0:y1, x0:x1][hit] = s.target_id
 
 
+_EDGE = np.linspace(0.0, 1.0, 9)
+_BOX_X = np.concatenate([_EDGE, np.ones(9), _EDGE, np.zeros(9)])  # 9 points along each side of a unit box
+_BOX_Y = np.concatenate([np.zeros(9), _EDGE, np.ones(9), _EDGE])
+
+
 def _pixel_box(view: _View, pts_rig: F64, pad: int = 2) -> tuple[int, int, int, int] | None:
     """Pixel bounding box (x0, y0, x1, y1) of rig-frame points (N, 3) as seen by `view`, or None when
     they are all outside the image; the whole image when some point is behind the camera."""
@@ -136,10 +141,7 @@ def _pixel_box(view: _View, pts_rig: F64, pad: int = 2) -> tuple[int, int, int, 
     y0, y1 = max(yn.min(), view.yn_range[0]), min(yn.max(), view.yn_range[1])
     if x0 >= x1 or y0 >= y1:
         return None
-    s = np.linspace(0.0, 1.0, 9)
-    bx = np.concatenate([x0 + (x1 - x0) * s, np.full(9, x1), x0 + (x1 - x0) * s, np.full(9, x0)])
-    by = np.concatenate([np.full(9, y0), y0 + (y1 - y0) * s, np.full(9, y1), y0 + (y1 - y0) * s])
-    u, v = cam.distort_normalized(bx, by)
+    u, v = cam.distort_normalized(x0 + (x1 - x0) * _BOX_X, y0 + (y1 - y0) * _BOX_Y)
     box = (max(int(u.min()) - pad, 0), max(int(v.min()) - pad, 0),
            min(int(np.ceil(u.max())) + pad + 1, w), min(int(np.ceil(v.max())) + pad + 1, h))
     return box if box[0] < box[2] and box[1] < box[3] else None
