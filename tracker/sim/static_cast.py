@@ -11,8 +11,9 @@ cv2.resize) in between: the only error is the curvature of the lens undistortion
 Which surface is nearest can only change across the image of a rectangle's edge or of the line where two
 rectangles cross (fixed 3-D segments, _segments). Cells such a segment may pass through are found by
 sampling its projection (_edge_cells) and cast per pixel by the reference's rule (_nearest); every other
-cell sees one surface, found once per run of such cells along a row (_labels). All textures share one
-atlas, so one cv2.remap textures the whole image.
+cell sees one surface, found once per run of such cells along a row (_runs, _spread). All textures share
+one atlas, so one cv2.remap textures the whole image. About 2 ms a camera at 640x480 on one core: the
+remap a quarter of it, the cells cast per pixel (about 4 % of the image) a fifth.
 
 Surfaces this cannot take (discs, swaying ones, planes within 10 cm of a camera) are returned to the
 caller to cast per pixel over the result (z-tested).
