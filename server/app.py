@@ -16,7 +16,8 @@ from fastapi.staticfiles import StaticFiles
 
 from server.context import AppContext
 from server.db.engine import make_engine, session_factory, upgrade
-from server.routes import auth, calibration, errors, health, servo, telemetry_ws, tracker, tracks, users
+from server.media.webrtc import Viewers
+from server.routes import auth, calibration, errors, health, live, servo, telemetry_ws, tracker, tracks, users
 from server.security import LoginThrottle, new_secret
 from server.services import calibration as cal_service
 from server.services import control
@@ -27,6 +28,7 @@ from server.services.monitor import Monitor
 from server.services.tracks import TrackWriter
 from server.settings import Settings
 from tmeye import __version__
+from tmeye.media.pipeline import MediaConfig, MediaPipeline
 from tmeye.runtime import Runtime, RuntimeConfig, TrackerTuning
 
 log = logging.getLogger("tmeye.server")
@@ -66,7 +68,8 @@ def _prepare_db(settings: Settings) -> tuple[AppContext, TrackerTuning, object]:
         rig = None if settings.rig else cal_service.active_rig(db, settings.data_dir)
     tuning = TrackerTuning().updated(saved) if saved else TrackerTuning()
     throttle = LoginThrottle(settings.login_user_failures, settings.login_address_failures, settings.login_window_s)
-    ctx = AppContext(settings, engine, sessions, key, throttle, None, None, None, Monitor())  # type: ignore[arg-type]
+    ctx = AppContext(settings, engine, sessions, key, throttle, None, None, None, Monitor(),  # type: ignore[arg-type]
+                     None, None, asyncio.Event())  # type: ignore[arg-type]
     return ctx, tuning, rig
 
 
@@ -82,6 +85,10 @@ def create_app(settings: Settings, runtime: Runtime | None = None) -> FastAPI:
             ctx.runtime = rt
             ctx.events = EventBus(asyncio.get_running_loop())
             ctx.calibrations = CalibrationJobs(ctx.sessions, settings.data_dir, ctx.events)
+            ctx.media = MediaPipeline(rt, MediaConfig(settings.video_bitrate, settings.video_gop, settings.stamp_frames,
+                                                      settings.mjpeg_fps, settings.mjpeg_quality))
+            ctx.media.start()
+            ctx.viewers = Viewers(ctx.media, settings.ice_servers)
             writer = TrackWriter(rt, ctx.sessions, settings.track_sample_hz, settings.track_flush_s)
             writer_task = asyncio.create_task(writer.run(), name="track-writer")
             monitor_task = asyncio.create_task(ctx.monitor.run(), name="loop-monitor")
@@ -91,9 +98,14 @@ def create_app(settings: Settings, runtime: Runtime | None = None) -> FastAPI:
             yield
         finally:
             log.info("stopping")
+            ctx.stopping.set()
+            if ctx.viewers is not None:
+                await ctx.viewers.close()
             if "track_writer" in ctx.extras:
                 monitor_task.cancel()
             await asyncio.to_thread(rt.stop)
+            if ctx.media is not None:
+                await asyncio.to_thread(ctx.media.stop)
             if "track_writer" in ctx.extras:
                 with contextlib.suppress(Exception):
                     await asyncio.wait_for(writer_task, 3.0)
@@ -107,7 +119,7 @@ def create_app(settings: Settings, runtime: Runtime | None = None) -> FastAPI:
                   description="Stereo tracker console API: status, telemetry, servo control, tracks, calibration, "
                               "users. Log in at /api/auth/login; send the token as `Authorization: Bearer`.")
     errors.install(app)
-    for r in (health, auth, servo, tracks, tracker, calibration, users, telemetry_ws):
+    for r in (health, auth, servo, tracks, tracker, calibration, users, live, telemetry_ws):
         app.include_router(r.router)
     if WEB_DIST.is_dir():
         app.mount("/", StaticFiles(directory=WEB_DIST, html=True), name="web")

@@ -2,15 +2,18 @@
 
 from __future__ import annotations
 
+import asyncio
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from sqlalchemy import Engine
 from sqlalchemy.orm import Session, sessionmaker
 
+from server.media.webrtc import Viewers
 from server.security import LoginThrottle
 from server.services.monitor import Monitor
 from server.settings import Settings
+from tmeye.media.pipeline import MediaPipeline
 from tmeye.runtime import Runtime
 
 if TYPE_CHECKING:
@@ -29,4 +32,7 @@ class AppContext:
     events: EventBus
     calibrations: CalibrationJobs
     monitor: Monitor
+    media: MediaPipeline
+    viewers: Viewers
+    stopping: asyncio.Event
     extras: dict[str, object] = field(default_factory=dict)

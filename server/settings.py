@@ -40,6 +40,12 @@ class Settings(BaseSettings):
                                                             "that does not answer within it is disconnected")
     track_sample_hz: float = Field(10.0, gt=0, le=30, description="trajectory samples stored per second per track")
     track_flush_s: float = Field(1.0, gt=0, le=60, description="how often the track writer commits (s)")
+    stamp_frames: bool = Field(False, description="measurement mode: the video (never the tracker's input) "
+                                                  "carries the frame index in its top-left 16 cells of 8x8 px")
+    video_bitrate: int = Field(1_500_000, ge=100_000, le=50_000_000, description="H.264 bits per second per camera")
+    video_gop: int = Field(45, ge=1, le=600, description="frames between H.264 keyframes (45: 1.5 s at 30 fps)")
+    mjpeg_fps: float = Field(15.0, gt=0, le=60, description="MJPEG fallback frames per second")
+    mjpeg_quality: int = Field(80, ge=1, le=100, description="MJPEG fallback JPEG quality")
     ice_servers: list[str] = Field(default_factory=list, description="STUN/TURN URLs for WebRTC (none by default)")
     log_level: str = Field("info", description="debug, info, warning or error")
 

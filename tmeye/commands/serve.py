@@ -25,6 +25,8 @@ def register(subparsers: Any) -> None:
     p.add_argument("--rig", help="rig file (default: the active calibration record, else the simulator's rig)")
     p.add_argument("--servo", help="sim (default), none, or a driver URL (maestro:/dev/ttyACM0, ascii:/dev/ttyUSB0)")
     p.add_argument("--log-level", choices=("debug", "info", "warning", "error"))
+    p.add_argument("--stamp-frames", action="store_true", default=None,
+                   help="measurement mode: the video carries the frame index in its top-left corner")
     p.set_defaults(func=run)
 
 
@@ -36,7 +38,8 @@ def settings_from(args: argparse.Namespace) -> Any:
 
     given = {k: v for k, v in {"host": args.host, "port": args.port, "data_dir": args.data_dir,
                                "source": args.source, "scenario": args.scenario, "seed": args.seed,
-                               "rig": args.rig, "servo": args.servo, "log_level": args.log_level}.items()
+                               "rig": args.rig, "servo": args.servo, "log_level": args.log_level,
+                               "stamp_frames": args.stamp_frames}.items()
              if v is not None}
     if args.inputs:
         given["inputs"] = list(args.inputs)
