@@ -82,6 +82,10 @@ def latency_ms(rec: Received, captured: dict[int, float]) -> list[float]:
     return sorted((t - captured[s]) * 1e3 for t, _, s in rec.frames if s in captured)
 
 
+def _q(v: list[float], p: float) -> float | None:
+    return round(v[min(len(v) - 1, int(p * (len(v) - 1)))], 1) if v else None
+
+
 async def measure(base_url: str, token: str, clients: int, seconds: float) -> dict[str, Any]:
     """`clients` viewers at once plus a telemetry listener; per camera the decoded rate (fps, the slowest
     client) and the capture-to-decoded latency percentiles (ms) over all clients."""
@@ -96,9 +100,8 @@ async def measure(base_url: str, token: str, clients: int, seconds: float) -> di
             fr = r.frames[len(r.frames) // 10:]  # after the first tenth (connection set-up)
             rates.append((len(fr) - 1) / (fr[-1][0] - fr[0][0]) if len(fr) > 2 else 0.0)
         lat = sorted(v for r in recs for v in latency_ms(r, captured))
-        q = (lambda p: round(lat[min(len(lat) - 1, int(p * (len(lat) - 1)))], 1)) if lat else (lambda p: None)
-        out[cam] = {"fps_min": round(min(rates), 2), "latency_ms": {"n": len(lat), "p50": q(0.5), "p95": q(0.95),
-                                                                   "p99": q(0.99)},
+        out[cam] = {"fps_min": round(min(rates), 2), "latency_ms": {"n": len(lat), "p50": _q(lat, 0.5),
+                                                                   "p95": _q(lat, 0.95), "p99": _q(lat, 0.99)},
                     "stamps_increasing": all(all(b[2] > a[2] or b[2] < 100 < a[2] for a, b in
                                                  zip(r.frames, r.frames[1:], strict=False)) for r in recs)}
     return out
