@@ -1,0 +1,52 @@
+// Types of the API's requests and answers, taken from the OpenAPI document (schema.d.ts is generated from
+// web/openapi.json by `npm run gen:api`). The endpoints added after that document was saved are typed by
+// hand below (WebRTC, MJPEG, point, primary) until the document is regenerated.
+import type { components } from "./schema";
+
+type S = components["schemas"];
+
+export type Role = S["UserOut"]["role"];
+export type LoginAnswer = S["LoginAnswer"];
+export type Status = S["Status"];
+export type ServoStatus = S["ServoStatus"];
+export type ServoMode = NonNullable<S["ModeRequest"]["mode"]>;
+export type Telemetry = S["Telemetry"];
+export type Detection = S["Detection"];
+export type GotoRequest = S["GotoRequest"];
+export type JogRequest = S["JogRequest"];
+export type Preset = S["Preset"];
+export type PresetIn = S["PresetIn"];
+export type TrackOut = S["TrackOut"];
+export type TrackDetail = S["TrackDetail"];
+export type TrackPoint = S["TrackPointOut"];
+export type TrackerSettings = S["TrackerSettings"];
+export type TrackerSettingsPatch = S["TrackerSettingsPatch"];
+export type CalibrationOut = S["CalibrationOut"];
+export type UserOut = S["UserOut"];
+export type UserIn = S["UserIn"];
+export type UserPatch = S["UserPatch"];
+export type AuditOut = S["AuditOut"];
+export type Health = S["Health"];
+
+/** `/ws/events` messages. */
+export interface ServerEvent {
+  type: string;
+  at: number;
+  id?: number;
+  message?: string | null;
+  [k: string]: unknown;
+}
+
+// --- endpoints newer than openapi.json -----------------------------------------------------------
+export interface WebRtcConfig {
+  ice_servers: (string | { urls: string | string[]; username?: string; credential?: string })[];
+}
+export interface SessionDescription {
+  sdp: string;
+  type: "offer" | "answer";
+}
+export interface PointRequest {
+  camera: "left" | "right";
+  u: number;
+  v: number;
+}

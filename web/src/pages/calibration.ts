@@ -1,0 +1,130 @@
+// The Calibration page: upload left/right chessboard image pairs with the board spec (admin), follow the
+// progress from /ws/events, list the records, activate one (admin), download its rig file.
+import { api, ApiError } from "../api/client";
+import type { CalibrationOut, ServerEvent } from "../api/types";
+import { field, h, notice } from "../lib/dom";
+import { num, time } from "../lib/format";
+import { atLeast, roleReason } from "../lib/session";
+import { ReconnectingSocket } from "../lib/socket";
+import type { Page, PageContext } from "./types";
+
+export function calibrationPage(ctx: PageContext): Page {
+  const { root, session, status } = ctx;
+  const canEdit = atLeast(session, "admin");
+  const msg = notice("status");
+  const left = h("input", { type: "file", name: "left", multiple: true, accept: "image/*", required: true });
+  const right = h("input", { type: "file", name: "right", multiple: true, accept: "image/*", required: true });
+  const board = h("input", { name: "board", value: "9x6", required: true, pattern: "\\d+x\\d+", size: 6 });
+  const square = h("input", { name: "square", type: "number", step: "any", min: 0.001, max: 10, value: "0.025",
+    required: true });
+  const submit = h("button", { type: "submit", class: "primary" }, "Upload and calibrate");
+  const form = h("form", { class: "row-form upload" },
+    h("fieldset", { disabled: !canEdit, class: "plain" },
+      h("legend", { class: "sr-only" }, "New calibration"),
+      field("Left images", left, "in the same order as the right ones"), field("Right images", right),
+      field("Board (inner corners)", board, "COLSxROWS, e.g. 9x6"), field("Square size (m)", square), submit));
+  const progress = h("progress", { max: 1, value: 0, "aria-label": "Calibration progress", hidden: true });
+  const progressText = h("p", { class: "muted", role: "status", "aria-live": "polite", "data-testid": "cal-progress" });
+  const tbody = h("tbody");
+  const table = h("table", { class: "data" }, h("caption", { class: "sr-only" }, "Calibrations, newest first"),
+    h("thead", null, h("tr", null, ...["#", "Created", "Status", "Board", "Pairs", "Result", "Active", ""].map((c) =>
+      h("th", { scope: "col" }, c)))), tbody);
+  root.replaceChildren(h("section", { class: "page" }, h("h1", null, "Calibration"),
+    h("section", { class: "panel", "aria-labelledby": "upload-title" }, h("h2", { id: "upload-title" }, "New calibration"),
+      canEdit ? h("p", { class: "muted" }, "Upload pairs of chessboard photos taken by the left and right cameras at the same moments.")
+        : h("p", { class: "reason", role: "note", "data-testid": "cal-reason" }, roleReason(session, "admin", "Calibrating")),
+      form, progress, progressText),
+    msg, h("div", { class: "table-wrap" }, table)));
+
+  let watching: number | null = null;
+  const onEvent = (ev: ServerEvent) => {
+    if (!ev.type?.startsWith("calibration.")) return;
+    if (watching !== null && ev.id !== watching) return;
+    if (ev.type === "calibration.progress") {
+      const text = String(ev.message ?? "");
+      const m = /(\d+)\s*\/\s*(\d+)/.exec(text);
+      progress.hidden = false;
+      if (m && Number(m[2]) > 0) progress.value = Number(m[1]) / Number(m[2]);
+      else progress.removeAttribute("value");
+      progressText.textContent = `Calibration #${ev.id}: ${text}`;
+    } else if (ev.type === "calibration.done") {
+      progress.value = 1;
+      progressText.textContent = `Calibration #${ev.id} done.`;
+      void load();
+    } else if (ev.type === "calibration.failed") {
+      progress.hidden = true;
+      progressText.textContent = `Calibration #${ev.id} failed: ${ev.message ?? "see the record"}`;
+      void load();
+    }
+  };
+  const socket = new ReconnectingSocket<ServerEvent>({ path: "/ws/events", onMessage: onEvent,
+    onState: (s) => status.slot("events", s === "open" ? "Events: connected" : "Events: reconnecting…", s === "open" ? "ok" : "warn") });
+
+  form.addEventListener("submit", async (ev) => {
+    ev.preventDefault();
+    if (!canEdit) return;
+    const lf = Array.from(left.files ?? []), rf = Array.from(right.files ?? []);
+    if (!lf.length || lf.length !== rf.length) {
+      msg.show(`Choose as many right images as left ones (${lf.length} left, ${rf.length} right).`, "bad");
+      return;
+    }
+    const fd = new FormData();
+    lf.forEach((f) => fd.append("left", f, f.name));
+    rf.forEach((f) => fd.append("right", f, f.name));
+    fd.append("board", board.value.trim());
+    fd.append("square", square.value);
+    submit.disabled = true;
+    msg.show(`Uploading ${lf.length} pairs…`, "info");
+    try {
+      const rec = await api.uploadCalibration(fd);
+      watching = rec.id;
+      progress.hidden = false;
+      progress.removeAttribute("value");
+      progressText.textContent = `Calibration #${rec.id} started.`;
+      msg.show(`Uploaded: calibration #${rec.id} is running.`, "ok");
+      void load();
+    } catch (e) {
+      msg.show(`Upload refused: ${e instanceof ApiError ? e.detail : String(e)}`, "bad");
+    } finally {
+      submit.disabled = false;
+    }
+  });
+
+  const summary = (c: CalibrationOut): string => {
+    if (c.status === "failed") return c.error ?? "failed";
+    if (c.status === "running") return "running…";
+    const rep = (c.report ?? {}) as Record<string, unknown>;
+    const rms = rep.rms_px ?? rep.stereo_rms_px ?? rep.rms;
+    return typeof rms === "number" ? `RMS ${num(rms, 3)} px` : "done";
+  };
+
+  async function load(): Promise<void> {
+    let list: CalibrationOut[];
+    try {
+      list = await api.calibrations();
+    } catch (e) {
+      msg.show(`Calibrations could not be loaded: ${e instanceof ApiError ? e.detail : String(e)}`, "bad");
+      return;
+    }
+    tbody.replaceChildren(...(list.length ? list.map((c) => h("tr", null, h("th", { scope: "row" }, String(c.id)),
+      h("td", null, time(c.created_at)), h("td", null, c.status), h("td", null, `${c.board}, ${num(c.square_m * 1000, 1)} mm`),
+      h("td", null, String(c.images)), h("td", { class: "detail" }, summary(c)), h("td", null, c.active ? "active" : ""),
+      h("td", { class: "actions" },
+        c.status === "done" ? h("a", { href: api.rigUrl(c.id), download: `rig-${c.id}.json`, class: "button small" },
+          "Download rig", h("span", { class: "sr-only" }, ` of calibration ${c.id}`)) : null,
+        c.status === "done" && !c.active ? h("button", { type: "button", class: "small", disabled: !canEdit,
+          title: canEdit ? undefined : roleReason(session, "admin", "Activating a calibration"),
+          "aria-label": `Activate calibration ${c.id}`, onclick: async () => {
+            try {
+              await api.activateCalibration(c.id);
+              msg.show(`Calibration #${c.id} is now the tracker's rig.`, "ok");
+              void load();
+            } catch (e) {
+              msg.show(`Not activated: ${e instanceof ApiError ? e.detail : String(e)}`, "bad");
+            }
+          } }, "Activate") : null)))
+      : [h("tr", null, h("td", { colSpan: 8, class: "muted" }, "No calibrations yet."))]));
+  }
+  void load();
+  return { unmount: () => { socket.close(); status.slot("events", null); } };
+}

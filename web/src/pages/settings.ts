@@ -1,0 +1,121 @@
+// The Settings page: the tracker's detection, identity and aiming settings as a form built from the
+// OpenAPI document's schemas (limits, descriptions, defaults). Admins change them (PATCH of what changed,
+// applied from the next frame); everyone else reads them.
+import openapi from "../../openapi.json";
+import { api, ApiError } from "../api/client";
+import type { TrackerSettings } from "../api/types";
+import { h, notice, uid } from "../lib/dom";
+import { atLeast, roleReason } from "../lib/session";
+import type { Page, PageContext } from "./types";
+
+interface Prop {
+  type?: string;
+  title?: string;
+  description?: string;
+  minimum?: number;
+  maximum?: number;
+  exclusiveMinimum?: number;
+  default?: number;
+}
+
+type Section = keyof TrackerSettings;
+const SECTIONS: { key: Section; schema: string; title: string }[] = [
+  { key: "detector", schema: "DetectorSettings", title: "Detection" },
+  { key: "tracks", schema: "TracksSettings", title: "Identity (tracks)" },
+  { key: "aim", schema: "AimSettings", title: "Aiming" },
+];
+
+const schemas = (openapi as unknown as { components: { schemas: Record<string, { properties: Record<string, Prop> }> } })
+  .components.schemas;
+
+export function settingsPage(ctx: PageContext): Page {
+  const { root, session } = ctx;
+  const canEdit = atLeast(session, "admin");
+  const msg = notice("status");
+  const inputs = new Map<string, { section: Section; name: string; input: HTMLInputElement; prop: Prop }>();
+  let current: TrackerSettings | null = null;
+
+  const fieldsets = SECTIONS.map(({ key, schema, title }) => {
+    const props = schemas[schema]?.properties ?? {};
+    const rows = Object.entries(props).map(([name, prop]) => {
+      const id = uid("set");
+      const input = h("input", { id, name: `${key}.${name}`, type: "number", required: true,
+        step: prop.type === "integer" ? 1 : "any",
+        min: prop.minimum ?? prop.exclusiveMinimum, max: prop.maximum, readOnly: !canEdit,
+        "aria-describedby": `${id}-hint` });
+      inputs.set(`${key}.${name}`, { section: key, name, input, prop });
+      const limits = [prop.minimum !== undefined ? `≥ ${prop.minimum}` : prop.exclusiveMinimum !== undefined
+        ? `> ${prop.exclusiveMinimum}` : "", prop.maximum !== undefined ? `≤ ${prop.maximum}` : ""].filter(Boolean).join(", ");
+      return h("div", { class: "field setting" },
+        h("label", { for: id }, prop.title ?? name, h("code", { class: "muted small" }, ` ${name}`)), input,
+        h("small", { class: "hint", id: `${id}-hint` },
+          [prop.description, limits, prop.default !== undefined ? `default ${prop.default}` : ""].filter(Boolean).join("; ")));
+    });
+    return h("fieldset", { class: "panel settings-group" }, h("legend", null, title), ...rows);
+  });
+  const save = h("button", { type: "submit", class: "primary", disabled: !canEdit }, "Save changes");
+  const reset = h("button", { type: "button", disabled: !canEdit, onclick: () => fill() }, "Undo edits");
+  const form = h("form", { class: "settings-form", "aria-describedby": canEdit ? undefined : "settings-reason" },
+    ...fieldsets, h("div", { class: "actions" }, save, reset));
+  root.replaceChildren(h("section", { class: "page" }, h("h1", null, "Tracker settings"),
+    canEdit ? h("p", { class: "muted" }, "Changes apply from the next frame and are kept across restarts.")
+      : h("p", { class: "reason", id: "settings-reason", role: "note", "data-testid": "settings-reason" },
+          `${roleReason(session, "admin", "Changing the tracker settings")} You can read them.`),
+    msg, form));
+
+  function fill(): void {
+    if (!current) return;
+    for (const { section, name, input } of inputs.values()) {
+      const v = (current[section] as Record<string, unknown>)[name];
+      input.value = v === undefined || v === null ? "" : String(v);
+      input.classList.remove("changed");
+    }
+  }
+
+  for (const { section, name, input } of inputs.values()) {
+    input.addEventListener("input", () => {
+      const v = current ? (current[section] as Record<string, unknown>)[name] : undefined;
+      input.classList.toggle("changed", String(v) !== input.value);
+    });
+  }
+
+  async function load(): Promise<void> {
+    try {
+      current = await api.trackerConfig();
+      fill();
+      msg.show("", "info");
+    } catch (e) {
+      msg.show(`Settings could not be loaded: ${e instanceof ApiError ? e.detail : String(e)}`, "bad");
+    }
+  }
+
+  form.addEventListener("submit", async (ev) => {
+    ev.preventDefault();
+    if (!canEdit || !current) return;
+    const patch: Record<string, Record<string, number>> = {};
+    for (const { section, name, input } of inputs.values()) {
+      const old = (current[section] as Record<string, unknown>)[name];
+      if (input.value === "" || String(old) === input.value) continue;
+      (patch[section] ??= {})[name] = Number(input.value);
+    }
+    if (!Object.keys(patch).length) {
+      msg.show("Nothing changed.", "info");
+      return;
+    }
+    save.disabled = true;
+    try {
+      current = await api.patchTrackerConfig(patch);
+      fill();
+      const n = Object.values(patch).reduce((a, s) => a + Object.keys(s).length, 0);
+      msg.show(`Saved ${n} setting${n === 1 ? "" : "s"}: applied from the next frame.`, "ok");
+    } catch (e) {
+      msg.show(e instanceof ApiError && e.status === 403 ? `Refused: ${e.detail}` :
+        `Not saved: ${e instanceof ApiError ? e.detail : String(e)}`, "bad");
+    } finally {
+      save.disabled = false;
+    }
+  });
+
+  void load();
+  return {};
+}

@@ -1,0 +1,131 @@
+// The Users page (admin): list, create, change role / password / disabled, delete; and the audit log.
+import { api, ApiError } from "../api/client";
+import type { AuditOut, Role, UserOut } from "../api/types";
+import { field, h, notice } from "../lib/dom";
+import { fromLocalInput, time, toLocalInput } from "../lib/format";
+import type { Page, PageContext } from "./types";
+
+const ROLES: Role[] = ["viewer", "operator", "admin"];
+
+export function usersPage(ctx: PageContext): Page {
+  const { root, session } = ctx;
+  const msg = notice("status");
+  const tbody = h("tbody");
+  const table = h("table", { class: "data" }, h("caption", { class: "sr-only" }, "Users"),
+    h("thead", null, h("tr", null, ...["User", "Role", "Created", "Disabled", "New password", ""].map((c) =>
+      h("th", { scope: "col" }, c)))), tbody);
+
+  const name = h("input", { name: "new-username", required: true, maxLength: 64, pattern: "[A-Za-z0-9_.@\\-]+",
+    autocomplete: "off" });
+  const pass = h("input", { name: "new-password", type: "password", required: true, minLength: 12, maxLength: 128,
+    autocomplete: "new-password" });
+  const role = h("select", { name: "new-role" }, ...ROLES.map((r) => h("option", { value: r }, r)));
+  const createForm = h("form", { class: "row-form" }, field("New username", name),
+    field("Password", pass, "12 to 128 characters"), field("Role", role), h("button", { type: "submit", class: "primary" }, "Create user"));
+
+  const aStart = h("input", { type: "datetime-local", name: "audit-start", value: toLocalInput(Date.now() / 1000 - 86400) });
+  const aAction = h("input", { name: "audit-action", placeholder: "e.g. servo.jog", maxLength: 64 });
+  const auditForm = h("form", { class: "row-form" }, field("Since", aStart), field("Action", aAction, "empty: all"),
+    h("button", { type: "submit" }, "Show audit log"));
+  const auditBody = h("tbody");
+  const auditTable = h("table", { class: "data" }, h("caption", { class: "sr-only" }, "Audit log, newest first"),
+    h("thead", null, h("tr", null, ...["Time", "User", "Address", "Action", "Target", "Detail"].map((c) =>
+      h("th", { scope: "col" }, c)))), auditBody);
+
+  root.replaceChildren(h("section", { class: "page" }, h("h1", null, "Users"), msg,
+    h("div", { class: "table-wrap" }, table),
+    h("section", { class: "panel", "aria-labelledby": "create-title" }, h("h2", { id: "create-title" }, "Create a user"),
+      createForm),
+    h("section", { class: "panel", "aria-labelledby": "audit-title" }, h("h2", { id: "audit-title" }, "Audit log"),
+      auditForm, h("div", { class: "table-wrap" }, auditTable))));
+
+  const fail = (what: string, e: unknown) =>
+    msg.show(`${what}: ${e instanceof ApiError ? e.detail : String(e)}`, "bad");
+
+  async function load(): Promise<void> {
+    let list: UserOut[];
+    try {
+      list = await api.users();
+    } catch (e) {
+      fail("Users could not be loaded", e);
+      return;
+    }
+    tbody.replaceChildren(...list.map((u) => {
+      const self = u.username === session.username;
+      const r = h("select", { name: `role-${u.id}`, "aria-label": `Role of ${u.username}` },
+        ...ROLES.map((x) => h("option", { value: x, selected: x === u.role }, x)));
+      const dis = h("input", { type: "checkbox", name: `disabled-${u.id}`, checked: u.disabled,
+        "aria-label": `${u.username} is disabled` });
+      const pw = h("input", { type: "password", name: `password-${u.id}`, minLength: 12, maxLength: 128,
+        autocomplete: "new-password", "aria-label": `New password for ${u.username}`, placeholder: "unchanged" });
+      const saveBtn = h("button", { type: "button", class: "small", "aria-label": `Save ${u.username}`, onclick: async () => {
+        const patch: { role?: Role; disabled?: boolean; password?: string } = {};
+        if (r.value !== u.role) patch.role = r.value as Role;
+        if (dis.checked !== u.disabled) patch.disabled = dis.checked;
+        if (pw.value) patch.password = pw.value;
+        if (!Object.keys(patch).length) {
+          msg.show(`Nothing changed for ${u.username}.`, "info");
+          return;
+        }
+        try {
+          await api.patchUser(u.id, patch);
+          msg.show(`Saved ${u.username}${patch.password ? " (its sessions were ended)" : ""}.`, "ok");
+          void load();
+          void loadAudit();
+        } catch (e) {
+          fail(`${u.username} not saved`, e);
+        }
+      } }, "Save");
+      const delBtn = h("button", { type: "button", class: "small danger", "aria-label": `Delete ${u.username}`,
+        disabled: self, title: self ? "You cannot delete yourself" : undefined, onclick: async () => {
+          if (!confirm(`Delete the user ${u.username}?`)) return;
+          try {
+            await api.deleteUser(u.id);
+            msg.show(`Deleted ${u.username}.`, "ok");
+            void load();
+            void loadAudit();
+          } catch (e) {
+            fail(`${u.username} not deleted`, e);
+          }
+        } }, "Delete");
+      return h("tr", { "data-user": u.username }, h("th", { scope: "row" }, u.username, self ? " (you)" : ""),
+        h("td", null, r), h("td", null, time(u.created_at)), h("td", null, dis), h("td", null, pw),
+        h("td", { class: "actions" }, saveBtn, delBtn));
+    }));
+  }
+
+  async function loadAudit(): Promise<void> {
+    let list: AuditOut[];
+    try {
+      list = await api.audit({ start: fromLocalInput(aStart.value), action: aAction.value.trim() || undefined, limit: 200 });
+    } catch (e) {
+      fail("Audit log could not be loaded", e);
+      return;
+    }
+    auditBody.replaceChildren(...(list.length ? list.map((a) => h("tr", null, h("td", null, time(a.at)),
+      h("td", null, a.username ?? "—"), h("td", null, a.address ?? "—"), h("td", null, h("code", null, a.action)),
+      h("td", null, a.target ?? ""), h("td", { class: "detail" }, a.detail ? JSON.stringify(a.detail) : "")))
+      : [h("tr", null, h("td", { colSpan: 6, class: "muted" }, "No entries."))]));
+  }
+
+  createForm.addEventListener("submit", async (ev) => {
+    ev.preventDefault();
+    try {
+      const u = await api.createUser({ username: name.value.trim(), password: pass.value, role: role.value as Role });
+      msg.show(`Created ${u.username} (${u.role}).`, "ok");
+      name.value = "";
+      pass.value = "";
+      void load();
+      void loadAudit();
+    } catch (e) {
+      fail("User not created", e);
+    }
+  });
+  auditForm.addEventListener("submit", (ev) => {
+    ev.preventDefault();
+    void loadAudit();
+  });
+  void load();
+  void loadAudit();
+  return {};
+}
