@@ -3,6 +3,9 @@
 import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
 
+/** title and legend above and below the canvas (px) */
+const CHROME_PX = 52;
+
 export type XY = [(number | null)[], (number | null)[]];
 
 export interface Wedge {
@@ -70,7 +73,8 @@ export class MetricView {
 
   private size(): { width: number; height: number } {
     const r = this.el.getBoundingClientRect();
-    return { width: Math.max(160, Math.floor(r.width)), height: Math.max(140, Math.floor(r.height)) };
+    // the box holds the title and the legend too
+    return { width: Math.max(160, Math.floor(r.width)), height: Math.max(120, Math.floor(r.height) - CHROME_PX) };
   }
 
   private create(): void {
@@ -167,6 +171,8 @@ export class MetricView {
     const ctx = u.ctx;
     const { left, top, width, height } = u.bbox;
     ctx.save();
+    ctx.textAlign = "left";
+    ctx.textBaseline = "alphabetic";
     ctx.beginPath();
     ctx.rect(left, top, width, height);
     ctx.clip();
@@ -218,6 +224,8 @@ export class MetricView {
     ctx.beginPath();
     ctx.rect(left, top, width, height);
     ctx.clip();
+    ctx.textAlign = "left";
+    ctx.textBaseline = "alphabetic";
     ctx.font = `${11 * devicePixelRatio}px system-ui, sans-serif`;
     for (const p of this.heads) {
       const X = u.valToPos(p.x, "x", true);
@@ -246,7 +254,7 @@ export class TimeView {
               private readonly series: SeriesSpec[]) {
     this.ro = new ResizeObserver(() => {
       const r = this.el.getBoundingClientRect();
-      this.plot?.setSize({ width: Math.max(200, Math.floor(r.width)), height: Math.max(140, Math.floor(r.height)) });
+      this.plot?.setSize({ width: Math.max(200, Math.floor(r.width)), height: Math.max(120, Math.floor(r.height) - CHROME_PX) });
     });
     this.ro.observe(el);
   }
@@ -256,7 +264,7 @@ export class TimeView {
     const r = this.el.getBoundingClientRect();
     this.plot = new uPlot({
       width: Math.max(200, Math.floor(r.width)),
-      height: Math.max(140, Math.floor(r.height)),
+      height: Math.max(120, Math.floor(r.height) - CHROME_PX),
       title: this.title,
       scales: { x: { time: false } },
       axes: [

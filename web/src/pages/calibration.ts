@@ -109,7 +109,7 @@ export function calibrationPage(ctx: PageContext): Page {
     tbody.replaceChildren(...(list.length ? list.map((c) => h("tr", null, h("th", { scope: "row" }, String(c.id)),
       h("td", null, time(c.created_at)), h("td", null, c.status), h("td", null, `${c.board}, ${num(c.square_m * 1000, 1)} mm`),
       h("td", null, String(c.images)), h("td", { class: "detail" }, summary(c)), h("td", null, c.active ? "active" : ""),
-      h("td", { class: "actions" },
+      h("td", null, h("div", { class: "actions" },
         c.status === "done" ? h("a", { href: api.rigUrl(c.id), download: `rig-${c.id}.json`, class: "button small" },
           "Download rig", h("span", { class: "sr-only" }, ` of calibration ${c.id}`)) : null,
         c.status === "done" && !c.active ? h("button", { type: "button", class: "small", disabled: !canEdit,
@@ -122,7 +122,7 @@ export function calibrationPage(ctx: PageContext): Page {
             } catch (e) {
               msg.show(`Not activated: ${e instanceof ApiError ? e.detail : String(e)}`, "bad");
             }
-          } }, "Activate") : null)))
+          } }, "Activate") : null))))
       : [h("tr", null, h("td", { colSpan: 8, class: "muted" }, "No calibrations yet."))]));
   }
   void load();

@@ -30,9 +30,10 @@ export function tracksPage(ctx: PageContext): Page {
   const planEl = h("div", { class: "plot-box tall" });
   const timeEl = h("div", { class: "plot-box tall" });
   const detail = h("section", { class: "panel", "aria-labelledby": "track-detail-title" }, detailTitle, detailInfo,
-    h("div", { class: "plots" }, h("div", { class: "plot" }, planEl), h("div", { class: "plot" }, timeEl)));
-  root.replaceChildren(h("section", { class: "page" }, h("h1", null, "Tracks"), form, msg,
-    h("div", { class: "table-wrap" }, table), detail));
+    h("div", { class: "track-plots" }, h("div", { class: "plot" }, planEl), h("div", { class: "plot" }, timeEl)));
+  root.replaceChildren(h("section", { class: "page wide" }, h("h1", null, "Tracks"), form, msg,
+    h("div", { class: "tracks-layout" }, h("div", { class: "table-wrap scroll", tabindex: 0,
+      "aria-label": "Tracks, newest first" }, table), detail)));
 
   const plan = new MetricView(planEl, { title: "Plan view", xLabel: "x (m, right)", yLabel: "z (m, ahead)", minSpan: 4,
     series: [{ label: "trajectory", stroke: "#ffb020" }] });
@@ -63,7 +64,7 @@ export function tracksPage(ctx: PageContext): Page {
     }
     msg.show(`${list.length} track${list.length === 1 ? "" : "s"}`, "ok");
     tbody.replaceChildren(...(list.length ? list.map((t) => h("tr", { "data-track": String(t.id) },
-      h("th", { scope: "row" }, `#${t.id}`, h("span", { class: "muted small" }, ` (run ${t.run_id.slice(0, 8)}, no. ${t.track_no})`)),
+      h("th", { scope: "row", title: `run ${t.run_id}, track ${t.track_no} of that run` }, `#${t.id}`),
       h("td", null, time(t.first_seen)), h("td", null, duration(t.last_seen - t.first_seen)),
       h("td", null, String(t.detections)), h("td", null, `${num(t.peak_speed_mps, 2)} m/s`),
       h("td", null, t.width_m != null ? `${num(t.width_m, 2)} × ${num(t.height_m, 2)} m` : "—"),

@@ -90,7 +90,7 @@ export function usersPage(ctx: PageContext): Page {
         } }, "Delete");
       return h("tr", { "data-user": u.username }, h("th", { scope: "row" }, u.username, self ? " (you)" : ""),
         h("td", null, r), h("td", null, time(u.created_at)), h("td", null, dis), h("td", null, pw),
-        h("td", { class: "actions" }, saveBtn, delBtn));
+        h("td", null, h("div", { class: "actions" }, saveBtn, delBtn)));
     }));
   }
 

@@ -84,7 +84,7 @@ export function drawOverlay(canvas: HTMLCanvasElement, o: OverlayInput): void {
     }
   }
   // readouts of the primary target
-  const lines = tel.detected && tel.r != null
+  const lines: string[] = o.camera === "right" ? [] : tel.detected && tel.r != null
     ? [
         `#${tel.track_id ?? "—"}  r ${num(tel.r, 2)} ± ${num(tel.sigma_r, 2)} m`,
         `θ ${num(tel.theta_deg, 2)} ± ${num(tel.sigma_theta_deg, 2)}°  φ ${num(tel.phi_deg, 2)} ± ${num(tel.sigma_phi_deg, 2)}°`,
@@ -98,7 +98,7 @@ export function drawOverlay(canvas: HTMLCanvasElement, o: OverlayInput): void {
   ctx.fillStyle = "rgba(0, 0, 0, 0.55)";
   ctx.fillRect(4 * dpr, by - 4 * dpr, bw, lines.length * lh + 8 * dpr);
   lines.forEach((l, i) => {
-    ctx.fillStyle = i === 0 && tel.detected ? PRIMARY : "#f2f2f2";
+    ctx.fillStyle = i === 0 && o.camera === "left" && tel.detected ? PRIMARY : "#f2f2f2";
     ctx.fillText(l, 10 * dpr, by + i * lh);
   });
 }
