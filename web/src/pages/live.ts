@@ -40,6 +40,34 @@ interface Debug {
   telemetryMessages: number;
   socketOpens: number;
   lastError: string | null;
+  servo: ServoStatus | null;
+  /** with window.__tmeyeVerifyStamps (tests, server --stamp-frames): the frame index stamped in the left
+   * picture on screen and the frame of the telemetry drawn over it */
+  stamps: { stamp: number; frame: number | null; offsetTicks: number | null }[];
+}
+
+const STAMP_BITS = 16, STAMP_CELL = 8;
+let stampCanvas: HTMLCanvasElement | null = null;
+
+/** The frame index the server's measurement mode (--stamp-frames) draws in the top-left corner: 16 cells of
+ * 8x8 px, most significant bit first, white for 1. */
+function readStamp(video: HTMLVideoElement, srcW: number): number | null {
+  const scale = video.videoWidth > 0 ? video.videoWidth / srcW : 1;
+  const w = STAMP_BITS * STAMP_CELL;
+  stampCanvas ??= document.createElement("canvas");
+  stampCanvas.width = w;
+  stampCanvas.height = STAMP_CELL;
+  const c = stampCanvas.getContext("2d", { willReadFrequently: true });
+  if (!c) return null;
+  c.drawImage(video, 0, 0, w * scale, STAMP_CELL * scale, 0, 0, w, STAMP_CELL);
+  const px = c.getImageData(0, 0, w, STAMP_CELL).data;
+  let v = 0;
+  for (let k = 0; k < STAMP_BITS; k++) {
+    const i = ((STAMP_CELL / 2) * w + k * STAMP_CELL + STAMP_CELL / 2) * 4;
+    const grey = (px[i] + px[i + 1] + px[i + 2]) / 3;
+    v = (v << 1) | (grey > 127 ? 1 : 0);
+  }
+  return v;
 }
 
 const HISTORY_S = 60;
@@ -57,7 +85,7 @@ export function livePage(ctx: PageContext): Page {
   const driveReason = canDrive ? "" : roleReason(session, "operator", "Driving the mount");
   const buffer = new TelemetryBuffer(3, 1500);
   const debug: Debug = { source: "none", frames: { left: 0, right: 0 }, sync: { left: null, right: null },
-    telemetryMessages: 0, socketOpens: 0, lastError: null };
+    telemetryMessages: 0, socketOpens: 0, lastError: null, servo: null, stamps: [] };
   (window as unknown as { __tmeye: Debug }).__tmeye = debug;
   let srcW = 640, srcH = 480;
   let deadbandFrac = 0.02;
@@ -269,6 +297,7 @@ export function livePage(ctx: PageContext): Page {
   function updateServo(s: ServoStatus | null | undefined): void {
     if (!s) return;
     servo = { ...servo, ...s };
+    debug.servo = servo;
     for (const b of modeButtons) b.setAttribute("aria-pressed", String(b.dataset.mode === servo.mode));
     R.servo.dd.textContent = servo.mode
       ? `${servo.mode}, pan ${num(servo.pan_deg, 2)}°, tilt ${num(servo.tilt_deg, 2)}°${servo.fault ? `, fault: ${servo.fault}` : ""}`
@@ -472,6 +501,13 @@ export function livePage(ctx: PageContext): Page {
       debug.sync[cam.camera] = { rtp: rtp ?? -1, frame: m?.msg.frame ?? null, offsetTicks: m?.offsetTicks ?? null,
         matched: m ? (m.offsetTicks === 0 ? "exact" : "near") : "none" };
       const tel = m?.msg ?? null;
+      if (cam.camera === "left" && (window as unknown as { __tmeyeVerifyStamps?: boolean }).__tmeyeVerifyStamps) {
+        const st = readStamp(v, srcW);
+        if (st !== null) {
+          debug.stamps.push({ stamp: st, frame: tel?.frame ?? null, offsetTicks: m?.offsetTicks ?? null });
+          if (debug.stamps.length > 600) debug.stamps.shift();
+        }
+      }
       drawCam(cam, tel, sync);
       if (cam.camera === "left" && tel) {
         const now = performance.now();

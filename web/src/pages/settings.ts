@@ -89,6 +89,12 @@ export function settingsPage(ctx: PageContext): Page {
     }
   }
 
+  // the browser checks each field's limits before submitting: say which one is out of range
+  form.addEventListener("invalid", (ev) => {
+    const input = ev.target as HTMLInputElement;
+    const item = inputs.get(input.name);
+    msg.show(`Not saved: ${item?.prop.title ?? input.name}: ${input.validationMessage}`, "bad");
+  }, true);
   form.addEventListener("submit", async (ev) => {
     ev.preventDefault();
     if (!canEdit || !current) return;
