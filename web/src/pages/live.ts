@@ -41,6 +41,10 @@ interface Debug {
   socketOpens: number;
   lastError: string | null;
   servo: ServoStatus | null;
+  /** the detections drawn over the left picture now, and the picture's size in source pixels */
+  shown: { track_id: number; box: number[] }[];
+  primary: number | null;
+  size: [number, number];
   /** with window.__tmeyeVerifyStamps (tests, server --stamp-frames): the frame index stamped in the left
    * picture on screen and the frame of the telemetry drawn over it */
   stamps: { stamp: number; frame: number | null; offsetTicks: number | null }[];
@@ -85,7 +89,8 @@ export function livePage(ctx: PageContext): Page {
   const driveReason = canDrive ? "" : roleReason(session, "operator", "Driving the mount");
   const buffer = new TelemetryBuffer(3, 1500);
   const debug: Debug = { source: "none", frames: { left: 0, right: 0 }, sync: { left: null, right: null },
-    telemetryMessages: 0, socketOpens: 0, lastError: null, servo: null, stamps: [] };
+    telemetryMessages: 0, socketOpens: 0, lastError: null, servo: null, stamps: [],
+    shown: [], primary: null, size: [640, 480] };
   (window as unknown as { __tmeye: Debug }).__tmeye = debug;
   let srcW = 640, srcH = 480;
   let deadbandFrac = 0.02;
@@ -234,12 +239,13 @@ export function livePage(ctx: PageContext): Page {
   const fieldset = h("fieldset", { class: "controls-set", disabled: !canDrive,
     "aria-describedby": canDrive ? undefined : reasonId },
     h("legend", { class: "sr-only" }, "Mount control"),
-    h("h3", null, "Mode"), h("div", { class: "modes", role: "group", "aria-label": "Servo mode" }, ...modeButtons),
-    h("h3", null, "Jog"), field("Jog speed", speed), speedOut, pad,
-    h("p", { class: "muted small" }, "Arrow keys jog while held (not in a text field); Shift doubles the speed."),
-    gamepadState,
-    h("h3", null, "Go to"), gotoForm,
-    h("h3", null, "Presets"), presetList, presetForm);
+    h("div", { class: "ctl-block" }, h("h3", null, "Mode"),
+      h("div", { class: "modes", role: "group", "aria-label": "Servo mode" }, ...modeButtons)),
+    h("div", { class: "ctl-block" }, h("h3", null, "Jog"), field("Jog speed", speed), speedOut, pad,
+      h("p", { class: "muted small" }, "Arrow keys jog while held (not in a text field); Shift doubles the speed."),
+      gamepadState),
+    h("div", { class: "ctl-block" }, h("h3", null, "Go to"), gotoForm),
+    h("div", { class: "ctl-block" }, h("h3", null, "Presets"), presetList, presetForm));
   const controls = h("aside", { class: "panel controls", "aria-labelledby": "ctl-title" },
     h("h2", { id: "ctl-title" }, "Mount"),
     canDrive ? null : h("p", { class: "reason", id: reasonId, role: "note", "data-testid": "drive-reason" }, driveReason),
@@ -480,6 +486,10 @@ export function livePage(ctx: PageContext): Page {
 
   const drawCam = (cam: CamView, tel: Telemetry | null, sync: string) => {
     cam.shown = tel;
+    if (cam.camera === "left") {
+      debug.shown = (tel?.detections ?? []).map((d) => ({ track_id: d.track_id, box: d.box }));
+      debug.primary = tel?.track_id ?? null;
+    }
     const motion = tel ? motionOf(buffer.before(tel, 0.6)) : null;
     drawOverlay(cam.canvas, { camera: cam.camera, srcW, srcH, tel, motion, deadbandFrac, sync });
   };
@@ -658,6 +668,7 @@ export function livePage(ctx: PageContext): Page {
     if (w > 0 && hh > 0 && (w !== srcW || hh !== srcH)) {
       srcW = w;
       srcH = hh;
+      debug.size = [w, hh];
       for (const c of Object.values(cams)) c.frame.style.aspectRatio = `${srcW} / ${srcH}`;
     }
     updateServo(s.servo);
