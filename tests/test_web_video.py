@@ -13,8 +13,19 @@ from typing import Any
 
 import pytest
 from server_helpers import Server, start_server
-from web_helpers import (admin, browser, debug, login, new_page, require_browser, require_route, screenshot,
-                         skip_reason, user, wait_for)
+from web_helpers import (
+    admin,
+    browser,
+    debug,
+    login,
+    new_page,
+    require_browser,
+    require_route,
+    screenshot,
+    skip_reason,
+    user,
+    wait_for,
+)
 
 pytestmark = pytest.mark.skipif(skip_reason() is not None, reason=skip_reason() or "")
 STAMPS = "window.__tmeyeVerifyStamps = true;"
@@ -102,8 +113,9 @@ def test_mjpeg_fallback_plays(server: Server, page_of: Any) -> None:
         wait_for(lambda img=img: img.evaluate("i => i.naturalWidth") > 0, 15, what=f"{cam} MJPEG picture")
         assert page.get_by_test_id(f"cam-{cam}-state").inner_text() == "MJPEG"
     # the pictures keep coming: the left picture changes
-    grab = "i => { const c = document.createElement('canvas'); c.width = 64; c.height = 48;" \
-           " const x = c.getContext('2d'); x.drawImage(i, 0, 0, 64, 48); return Array.from(x.getImageData(0, 0, 64, 48).data).join(',') }"
+    grab = ("i => { const c = document.createElement('canvas'); c.width = 64; c.height = 48;"
+            " const x = c.getContext('2d'); x.drawImage(i, 0, 0, 64, 48);"
+            " return Array.from(x.getImageData(0, 0, 64, 48).data).join(',') }")
     img = page.locator("figure[data-camera='left'] img")
     first = img.evaluate(grab)
     wait_for(lambda: img.evaluate(grab) != first, 10, what="a new MJPEG picture")
