@@ -136,7 +136,7 @@ export const api = {
   gotoPreset: (id: number) => post<ServoStatus>(`/api/servo/presets/${id}/goto`),
   deletePreset: (id: number) => request<void>("DELETE", `/api/servo/presets/${id}`),
 
-  makePrimary: (trackId: number) => post<unknown>(`/api/tracks/${trackId}/primary`),
+  makePrimary: (trackId: number) => post<void>(`/api/tracks/${trackId}/primary`),
   tracks: (start?: number, end?: number, limit?: number) =>
     get<TrackOut[]>("/api/tracks", { query: { start, end, limit } }),
   track: (id: number) => get<TrackDetail>(`/api/tracks/${id}`),

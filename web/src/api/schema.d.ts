@@ -157,6 +157,23 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/servo/point": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /** Bring what is seen at a pixel to the image centre (through the calibrated camera; manual) */
+        post: operations["point_api_servo_point_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/api/servo/presets": {
         parameters: {
             query?: never;
@@ -220,6 +237,23 @@ export interface paths {
         get: operations["list_tracks_api_tracks_get"];
         put?: never;
         post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/tracks/{track_id}/primary": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /** Make a live track (the telemetry's track_id) the primary target */
+        post: operations["primary_api_tracks__track_id__primary_post"];
         delete?: never;
         options?: never;
         head?: never;
@@ -375,6 +409,57 @@ export interface paths {
         };
         /** Audit log, newest first */
         get: operations["list_audit_api_audit_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/webrtc/config": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /** ICE servers for the browser (none by default) */
+        get: operations["webrtc_config_api_webrtc_config_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/webrtc/offer": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /** Offer receive-only video transceivers (1st: left camera, 2nd: right); get the answer */
+        post: operations["webrtc_offer_api_webrtc_offer_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/live/{camera}.mjpeg": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /** MJPEG fallback of one camera */
+        get: operations["mjpeg_api_live__camera__mjpeg_get"];
         put?: never;
         post?: never;
         delete?: never;
@@ -749,6 +834,27 @@ export interface components {
             /** Max */
             max: number | null;
         };
+        /** PointRequest */
+        PointRequest: {
+            /**
+             * Camera
+             * @example left
+             * @enum {string}
+             */
+            camera: "left" | "right";
+            /**
+             * U
+             * @description pixel column in the full-size image
+             * @example 412
+             */
+            u: number;
+            /**
+             * V
+             * @description pixel row
+             * @example 198.5
+             */
+            v: number;
+        };
         /** Preset */
         Preset: {
             /** Id */
@@ -830,6 +936,16 @@ export interface components {
             limits?: {
                 [key: string]: number[];
             } | null;
+        };
+        /** SessionDescription */
+        SessionDescription: {
+            /** Sdp */
+            sdp: string;
+            /**
+             * Type
+             * @enum {string}
+             */
+            type: "offer" | "answer";
         };
         /** Status */
         Status: {
@@ -1155,6 +1271,11 @@ export interface components {
             input?: unknown;
             /** Context */
             ctx?: Record<string, never>;
+        };
+        /** WebRTCConfig */
+        WebRTCConfig: {
+            /** Ice Servers */
+            ice_servers: string[];
         };
     };
     responses: never;
@@ -1486,6 +1607,57 @@ export interface operations {
             };
         };
     };
+    point_api_servo_point_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody: {
+            content: {
+                "application/json": components["schemas"]["PointRequest"];
+            };
+        };
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ServoStatus"];
+                };
+            };
+            /** @description no servo configured */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+            /** @description Unprocessable Entity */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+            /** @description Service Unavailable */
+            503: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+        };
+    };
     list_presets_api_servo_presets_get: {
         parameters: {
             query?: never;
@@ -1675,6 +1847,53 @@ export interface operations {
                 };
                 content: {
                     "application/json": components["schemas"]["TrackOut"][];
+                };
+            };
+            /** @description Validation Error */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["HTTPValidationError"];
+                };
+            };
+        };
+    };
+    primary_api_tracks__track_id__primary_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                track_id: number;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            204: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content?: never;
+            };
+            /** @description Not Found */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+            /** @description Conflict */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
                 };
             };
             /** @description Validation Error */
@@ -2166,6 +2385,90 @@ export interface operations {
                 };
                 content: {
                     "application/json": components["schemas"]["AuditOut"][];
+                };
+            };
+            /** @description Validation Error */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["HTTPValidationError"];
+                };
+            };
+        };
+    };
+    webrtc_config_api_webrtc_config_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["WebRTCConfig"];
+                };
+            };
+        };
+    };
+    webrtc_offer_api_webrtc_offer_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody: {
+            content: {
+                "application/json": components["schemas"]["SessionDescription"];
+            };
+        };
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["SessionDescription"];
+                };
+            };
+            /** @description Unprocessable Entity */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+        };
+    };
+    mjpeg_api_live__camera__mjpeg_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                camera: "left" | "right";
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "multipart/x-mixed-replace; boundary=tmeyeframe": unknown;
                 };
             };
             /** @description Validation Error */

@@ -1,6 +1,5 @@
 // Types of the API's requests and answers, taken from the OpenAPI document (schema.d.ts is generated from
-// web/openapi.json by `npm run gen:api`). The endpoints added after that document was saved are typed by
-// hand below (WebRTC, MJPEG, point, primary) until the document is regenerated.
+// web/openapi.json by `npm run gen:api`; refresh openapi.json from a running server's /api/openapi.json).
 import type { components } from "./schema";
 
 type S = components["schemas"];
@@ -37,16 +36,6 @@ export interface ServerEvent {
   [k: string]: unknown;
 }
 
-// --- endpoints newer than openapi.json -----------------------------------------------------------
-export interface WebRtcConfig {
-  ice_servers: (string | { urls: string | string[]; username?: string; credential?: string })[];
-}
-export interface SessionDescription {
-  sdp: string;
-  type: "offer" | "answer";
-}
-export interface PointRequest {
-  camera: "left" | "right";
-  u: number;
-  v: number;
-}
+export type WebRtcConfig = S["WebRTCConfig"];
+export type SessionDescription = S["SessionDescription"];
+export type PointRequest = S["PointRequest"];

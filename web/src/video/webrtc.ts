@@ -12,8 +12,8 @@ export interface RtcVideo {
   close(): void;
 }
 
-function iceServers(list: unknown[]): RTCIceServer[] {
-  return list.map((s) => (typeof s === "string" ? { urls: s } : (s as RTCIceServer)));
+function iceServers(list: (string | RTCIceServer)[]): RTCIceServer[] {
+  return list.map((s) => (typeof s === "string" ? { urls: s } : s));
 }
 
 function waitGathering(pc: RTCPeerConnection, timeoutMs: number): Promise<void> {
