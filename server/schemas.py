@@ -159,6 +159,12 @@ class JogRequest(Strict):
     duration_s: float = Field(gt=0, le=10, description="how long to jog (s)", examples=[0.5])
 
 
+class PointRequest(Strict):
+    camera: Literal["left", "right"] = Field(examples=["left"])
+    u: float = Field(ge=0, le=100000, description="pixel column in the full-size image", examples=[412.0])
+    v: float = Field(ge=0, le=100000, description="pixel row", examples=[198.5])
+
+
 class PresetIn(Strict):
     name: str = Field(min_length=1, max_length=64, pattern=r"^[\w .-]+$", examples=["gate"])
     pan_deg: float | None = Field(None, ge=-360, le=360, description="default: the mount's current angle")

@@ -185,3 +185,47 @@ def test_a_failing_source_is_a_fault_not_a_dead_worker() -> None:
         assert rt.running and rt.frames > n + 5 and rt.status()["faults"] == []
     finally:
         rt.stop()
+
+
+def _settle(rt: Runtime, seconds: float = 3.0) -> None:
+    """Until the mount's angles stop changing (simulated gimbal)."""
+    last = None
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        time.sleep(0.3)
+        ev = rt.latest
+        now = None if ev is None or ev.servo is None else (round(ev.servo.pan_deg, 3), round(ev.servo.tilt_deg, 3))
+        if now is not None and now == last:
+            return
+        last = now
+
+
+@pytest.mark.parametrize(("camera", "u", "v"), [("left", 560.0, 120.0), ("right", 90.0, 400.0)])
+def test_click_to_point_centres_the_scene_point(camera: str, u: float, v: float) -> None:
+    import numpy as np
+
+    from tracker.geometry import gimbal_rotation
+
+    rt = _closed_loop()
+    try:
+        rt.servo_mode(ServoMode.HOLD).result(2)
+        _settle(rt)
+        assert rt.comp is not None and rt.latest is not None and rt.comp.sim is not None
+        g = rt.latest.frame.gimbal
+        assert g is not None
+        k = 0 if camera == "left" else 1
+        cam = (rt.comp.rig.left, rt.comp.rig.right)[k]
+        depth = rt.comp.sim.sim.renderer.static_depth(g)[k] if hasattr(rt.comp.sim, "sim") \
+            else rt.comp.sim.renderer.static_depth(g)[k]  # type: ignore[union-attr]
+        dist = float(depth[int(v), int(u)])  # the true distance along that pixel's ray
+        d = cam.rays_rig(np.array([u]), np.array([v]))[0]
+        X = gimbal_rotation(g.pan_deg, g.tilt_deg) @ (cam.c + dist * d)
+        rt.servo_point(camera, u, v).result(2)
+        _settle(rt)
+        g2 = rt.latest.frame.gimbal
+        assert g2 is not None
+        px = cam.project((gimbal_rotation(g2.pan_deg, g2.tilt_deg).T @ X)[None, :])[0]
+        off = float(np.hypot(*(px - cam.K[:2, 2])))
+        assert off <= 0.01 * cam.size[0], (camera, px, off)
+    finally:
+        rt.stop()

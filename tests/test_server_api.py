@@ -25,6 +25,9 @@ ROLE = {
     ("PATCH", "/api/tracker/config"): "admin", ("POST", "/api/calibrations"): "admin",
     ("GET", "/api/calibrations"): "viewer", ("GET", "/api/calibrations/{rec_id}"): "viewer",
     ("POST", "/api/calibrations/{rec_id}/activate"): "admin", ("GET", "/api/calibrations/{rec_id}/rig"): "viewer",
+    ("POST", "/api/servo/point"): "operator", ("POST", "/api/tracks/{track_id}/primary"): "operator",
+    ("GET", "/api/webrtc/config"): "viewer", ("POST", "/api/webrtc/offer"): "viewer",
+    ("GET", "/api/live/{camera}.mjpeg"): "viewer",
     ("GET", "/api/users"): "admin", ("POST", "/api/users"): "admin", ("PATCH", "/api/users/{user_id}"): "admin",
     ("DELETE", "/api/users/{user_id}"): "admin", ("GET", "/api/audit"): "admin",
 }
@@ -46,7 +49,7 @@ def tokens(server: Server) -> dict[str, str]:
 
 def _call(c: httpx.Client, method: str, path: str) -> httpx.Response:
     url = path.replace("{preset_id}", "999999").replace("{track_id}", "999999").replace("{rec_id}", "999999") \
-        .replace("{user_id}", "999999")
+        .replace("{user_id}", "999999").replace("{camera}", "left")
     if method in ("GET", "DELETE"):
         return c.request(method, url)
     return c.request(method, url, json={})

@@ -23,7 +23,7 @@ from enum import StrEnum
 import numpy as np
 
 from tracker.frames import GimbalState
-from tracker.geometry import gimbal_rotation
+from tracker.geometry import Camera, gimbal_rotation
 from tracker.predict import F64, PredictedState
 from tracker.servo.base import DEFAULT_PAN_LIMITS, DEFAULT_TILT_LIMITS, AxisLimits
 
@@ -99,6 +99,30 @@ def centroid_direction(g: GimbalState, du: float, dv: float, focal_px: float) ->
     d_world = R_world_rig(g) @ [du/f, dv/f, 1] (exact, no small-angle approximation)."""
     d = gimbal_rotation(g.pan_deg, g.tilt_deg) @ np.array([du / focal_px, dv / focal_px, 1.0])
     return aim_angles(d)
+
+
+def point_angles(cam: Camera, u: float, v: float, distance_m: float, g: GimbalState,
+                 iterations: int = 6) -> tuple[float, float]:
+    """(pan, tilt) in degrees that bring the scene point seen at raw pixel (u, v) of camera `cam` (at
+    gimbal angles g, `distance_m` along its ray) onto that camera's optical axis.
+
+    The point is X = R_world_rig(g) (c + t d) for the pixel's rig-frame ray d and lens centre c; the axis
+    of the camera at new angles g' passes through R(g') (c + s e_z). The camera sits off the pivot, so
+    the angles are found by fixed-point iteration: aim the pivot's axis at X - R(g') c (exact in the
+    limit; the offset |c| is small against the distance, so it converges in a few steps)."""
+    d = cam.rays_rig(np.array([u], float), np.array([v], float))[0]
+    X = gimbal_rotation(g.pan_deg, g.tilt_deg) @ (cam.c + distance_m * d)
+    axis_c = cam.R_rc.T @ np.array([0.0, 0.0, 1.0])  # the camera's axis in the rig frame
+    pan, tilt = aim_angles(X)
+    for _ in range(iterations):
+        R = gimbal_rotation(pan, tilt)
+        # the pivot's axis aimed at X - R c, corrected for the camera's axis direction in the rig frame
+        want = X - R @ cam.c
+        pan, tilt = aim_angles(want)
+        if abs(axis_c[0]) + abs(axis_c[1]) > 1e-9:
+            dp, dt = aim_angles(axis_c)
+            pan, tilt = pan - dp, tilt - dt
+    return pan, tilt
 
 
 def _wrap_deg(a: float) -> float:

@@ -91,6 +91,15 @@ class MultiTracker:
         gate = [self.cfg.gate_px + self.cfg.gate_growth_px * tr.missed for tr in self.tracks]
         return [(int(r), int(c)) for r, c in zip(rows, cols, strict=True) if cost[r, c] <= gate[r]]
 
+    def select_primary(self, track_id: int) -> bool:
+        """Make a living track the primary target (an operator's choice); False if there is no such track."""
+        tr = self.get(track_id)
+        if tr is None:
+            return False
+        tr.confirmed = True
+        self.primary_id = track_id
+        return True
+
     def _choose_primary(self) -> None:
         alive = {tr.track_id: tr for tr in self.tracks if tr.confirmed}
         if self.primary_id in alive:

@@ -7,7 +7,7 @@ from typing import Any
 from fastapi import APIRouter
 
 from server.deps import Address, CtxDep, DbDep, Operator, Viewer
-from server.schemas import GotoRequest, JogRequest, Message, ModeRequest, Preset, PresetIn, ServoStatus
+from server.schemas import GotoRequest, JogRequest, Message, ModeRequest, PointRequest, Preset, PresetIn, ServoStatus
 from server.services import control
 
 router = APIRouter(prefix="/api/servo", tags=["servo"])
@@ -33,6 +33,12 @@ def goto(body: GotoRequest, ctx: CtxDep, p: Operator, db: DbDep, addr: Address) 
 @router.post("/jog", response_model=ServoStatus, responses=ERRORS, summary="Move at a rate for a while (manual)")
 def jog(body: JogRequest, ctx: CtxDep, p: Operator, db: DbDep, addr: Address) -> dict[str, Any]:
     return control.jog(db, ctx.runtime, p.user, addr, body.pan_dps, body.tilt_dps, body.duration_s)
+
+
+@router.post("/point", response_model=ServoStatus, responses=ERRORS,
+             summary="Bring what is seen at a pixel to the image centre (through the calibrated camera; manual)")
+def point(body: PointRequest, ctx: CtxDep, p: Operator, db: DbDep, addr: Address) -> dict[str, Any]:
+    return control.point(db, ctx.runtime, p.user, addr, body.camera, body.u, body.v)
 
 
 @router.get("/presets", response_model=list[Preset], summary="Named positions")

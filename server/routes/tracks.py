@@ -6,8 +6,9 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, Query
 
-from server.deps import DbDep, Viewer
+from server.deps import Address, CtxDep, DbDep, Operator, Viewer
 from server.schemas import Message, TrackDetail, TrackOut
+from server.services import control
 from server.services import tracks as track_service
 
 router = APIRouter(prefix="/api/tracks", tags=["tracks"])
@@ -18,6 +19,12 @@ def list_tracks(_p: Viewer, db: DbDep, start: Annotated[float | None, Query(desc
                 end: Annotated[float | None, Query(description="Unix s")] = None,
                 limit: Annotated[int, Query(ge=1, le=10000)] = 500) -> list[Any]:
     return track_service.list_tracks(db, start, end, limit)
+
+
+@router.post("/{track_id}/primary", status_code=204, responses={404: {"model": Message}, 409: {"model": Message}},
+             summary="Make a live track (the telemetry's track_id) the primary target")
+def primary(track_id: int, ctx: CtxDep, p: Operator, db: DbDep, addr: Address) -> None:
+    control.select_primary(db, ctx.runtime, p.user, addr, track_id)
 
 
 @router.get("/{track_id}", response_model=TrackDetail, responses={404: {"model": Message}},

@@ -68,6 +68,21 @@ def goto(db: Session, rt: Runtime, user: User, address: str, pan_deg: float, til
     return servo_state(rt)
 
 
+def point(db: Session, rt: Runtime, user: User, address: str, camera: str, u: float, v: float) -> dict[str, Any]:
+    pan, tilt = wait(rt.servo_point(camera, u, v))
+    audit.record(db, user, address, "servo.point", camera, {"u": u, "v": v, "pan_deg": round(pan, 4),
+                                                           "tilt_deg": round(tilt, 4)})
+    db.commit()
+    return servo_state(rt)
+
+
+def select_primary(db: Session, rt: Runtime, user: User, address: str, track_id: int) -> None:
+    if not wait(rt.select_primary(track_id)):
+        raise NotFound(f"no live track {track_id} (it may have ended)")
+    audit.record(db, user, address, "track.primary", str(track_id))
+    db.commit()
+
+
 def jog(db: Session, rt: Runtime, user: User, address: str, pan_dps: float, tilt_dps: float,
         duration_s: float) -> dict[str, Any]:
     wait(rt.servo_jog(pan_dps, tilt_dps, duration_s))

@@ -24,6 +24,7 @@ from typing import Any, TypeVar
 
 from tmeye.runtime.compose import Composition, compose, describe_source, rebuild_pipeline
 from tmeye.runtime.config import RuntimeConfig, TrackerTuning
+from tmeye.runtime.pointing import pixel_angles
 from tmeye.runtime.publish import Hub
 from tmeye.runtime.servo import ServoControl, ServoMode
 from tmeye.runtime.telemetry import detection_json, telemetry
@@ -334,6 +335,27 @@ class Runtime:
 
     def servo_jog(self, pan_dps: float, tilt_dps: float, duration_s: float) -> Future[None]:
         return self.submit(lambda: self._need_servo().jog(pan_dps, tilt_dps, duration_s))
+
+    def servo_point(self, camera: str, u: float, v: float) -> Future[tuple[float, float]]:
+        """Point the mount so that what is seen at raw pixel (u, v) of `camera` comes to its centre."""
+        return self.submit(lambda: self._point(camera, u, v))
+
+    def select_primary(self, track_id: int) -> Future[bool]:
+        """Make a living track the primary target; the Future holds False if there is no such track."""
+        def apply() -> bool:
+            assert self.comp is not None
+            ok = self.comp.pipeline.tracker.select_primary(track_id)
+            if ok and self.comp.loop is not None and self.comp.loop.predictor is not None:
+                self.comp.loop.predictor.reset()  # a new target: the old one's motion says nothing
+            return ok
+        return self.submit(apply)
+
+    def _point(self, camera: str, u: float, v: float) -> tuple[float, float]:
+        servo = self._need_servo()
+        assert self.comp is not None
+        pan, tilt = pixel_angles(self.comp, self.latest, camera, u, v)
+        servo.goto(pan, tilt)
+        return pan, tilt
 
     def _need_servo(self) -> ServoControl:
         if self.servo is None:
