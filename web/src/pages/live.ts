@@ -418,8 +418,10 @@ export function livePage(ctx: PageContext): Page {
 
   // ---------------------------------------------------------------- telemetry
   let lastDom = 0;
+  let telemetryAt = 0;
   const onTelemetry = (msg: Telemetry) => {
     debug.telemetryMessages += 1;
+    telemetryAt = performance.now();
     buffer.push(msg);
     if (msg.servo) updateServo(msg.servo);
     primaryId = msg.track_id;
@@ -433,7 +435,7 @@ export function livePage(ctx: PageContext): Page {
       const now = performance.now();
       if (now - lastDom > 100) {
         lastDom = now;
-        renderReadouts(msg, source === "mjpeg" ? "latest telemetry (MJPEG has no frame timestamps)" : "latest telemetry");
+        renderReadouts(msg, source === "mjpeg" ? "latest (MJPEG has no frame timestamps)" : "latest");
       }
     }
   };
@@ -457,7 +459,7 @@ export function livePage(ctx: PageContext): Page {
   function renderReadouts(tel: Telemetry, sync: string): void {
     const win = buffer.before(tel, 0.6);
     const m = motionOf(win);
-    R.frame.dd.textContent = `${tel.frame} (${sync})`;
+    R.frame.dd.textContent = `${tel.frame} · ${sync}`;
     R.target.dd.textContent = tel.detected && tel.track_id !== null ? `#${tel.track_id}` : "none";
     R.r.dd.textContent = tel.r != null ? `${num(tel.r, 2)} ± ${num(tel.sigma_r, 3)} m` : "—";
     R.theta.dd.textContent = tel.theta_deg != null ? `${num(tel.theta_deg, 2)} ± ${num(tel.sigma_theta_deg, 3)}°` : "—";
@@ -671,7 +673,9 @@ export function livePage(ctx: PageContext): Page {
       debug.size = [w, hh];
       for (const c of Object.values(cams)) c.frame.style.aspectRatio = `${srcW} / ${srcH}`;
     }
-    updateServo(s.servo);
+    // the telemetry carries the servo state of every frame; the status fills in when it does not flow
+    if (performance.now() - telemetryAt > 2000) updateServo(s.servo);
+    else if (s.servo.limits) updateServo({ limits: s.servo.limits } as ServoStatus);
   };
   cleanups.push(status.subscribe(onStatus));
   for (const c of Object.values(cams)) c.frame.style.aspectRatio = `${srcW} / ${srcH}`;
