@@ -319,7 +319,8 @@ class StaticScene:
     def __init__(self, cams: list[Camera], surfaces: list[Surface]):
         self.cams = cams
         self.surfaces = surfaces
-        self._fast = [s for s in surfaces if _fits_atlas(s)]
+        self._fast = [s for s in surfaces if _fits_atlas(s)][:255]  # labels are uint8, 255 for none
+        self._fast_ids = {id(s) for s in self._fast}
         self._atlas, origins = _atlas(self._fast) if self._fast else (np.zeros((1, 1), np.uint8), np.zeros((0, 2)))
         self._planes = _planes(self._fast, origins)
         self._grids = [_grid(c) for c in cams]
@@ -334,7 +335,7 @@ class StaticScene:
         H, q = _plane_rows(cam, R_wr, p)
         near = np.abs(q) < 0.1  # then every hit is over 0.1 m away, as the reference requires (> 0.05 m)
         too_near = {id(s) for s, n in zip(self._fast, near, strict=True) if n}
-        rest = [s for s in self.surfaces if not _fits_atlas(s) or id(s) in too_near]
+        rest = [s for s in self.surfaces if id(s) not in self._fast_ids or id(s) in too_near]
         if near.all():
             return np.zeros((h, w), np.uint8), np.full((h, w), _NO_HIT[2], np.float32), rest
         centre, half = p.centre, p.half
