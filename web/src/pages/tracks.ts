@@ -7,6 +7,8 @@ import { duration, fromLocalInput, num, time, toLocalInput } from "../lib/format
 import { MetricView, TimeView, type XY } from "../lib/plots";
 import type { Page, PageContext } from "./types";
 
+const LIMIT = 500;
+
 export function tracksPage(ctx: PageContext): Page {
   const { root } = ctx;
   const now = Date.now() / 1000;
@@ -57,12 +59,13 @@ export function tracksPage(ctx: PageContext): Page {
     msg.show("Loading…");
     let list: TrackOut[];
     try {
-      list = await api.tracks(fromLocalInput(start.value), fromLocalInput(end.value));
+      list = await api.tracks(fromLocalInput(start.value), fromLocalInput(end.value), LIMIT);
     } catch (e) {
       msg.show(`Tracks could not be loaded: ${e instanceof ApiError ? e.detail : String(e)}`, "bad");
       return;
     }
-    msg.show(`${list.length} track${list.length === 1 ? "" : "s"}`, "ok");
+    msg.show(list.length >= LIMIT ? `${list.length} tracks: the newest ${LIMIT} in this range (narrow it to see older ones)`
+      : `${list.length} track${list.length === 1 ? "" : "s"}`, "ok");
     tbody.replaceChildren(...(list.length ? list.map((t) => h("tr", { "data-track": String(t.id) },
       h("th", { scope: "row", title: `run ${t.run_id}, track ${t.track_no} of that run` }, `#${t.id}`),
       h("td", null, time(t.first_seen)), h("td", null, duration(t.last_seen - t.first_seen)),
@@ -91,7 +94,8 @@ export function tracksPage(ctx: PageContext): Page {
     plan.setData([xy], [], last ? [{ x: last.x, y: last.z, color: "#ffb020", label: "end" }] : []);
     const t0 = t.trajectory[0]?.t ?? 0;
     tv.setData([t.trajectory.map((p) => p.t - t0), t.trajectory.map((p) => p.r), t.trajectory.map((p) => -p.y)]);
-    detail.scrollIntoView({ block: "nearest" });
+    // one column (tablet): bring the plot into view; side by side it is already there
+    if (matchMedia("(max-width: 1100px)").matches) detail.scrollIntoView({ block: "nearest" });
   }
 
   form.addEventListener("submit", (ev) => {
