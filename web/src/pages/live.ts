@@ -106,10 +106,11 @@ export function livePage(ctx: PageContext): Page {
     const img = h("img", { alt: "", hidden: true });
     const canvas = h("canvas", { class: "overlay", "aria-hidden": "true" });
     const frame = h("div", {
-      class: "cam-frame", tabindex: 0, role: "img",
+      class: "cam-frame", role: "img",
       "aria-label": `${title}. ${canDrive ? (camera === "left"
-        ? "Click to point the mount there; click a detection box to make it the primary target."
-        : "Click to point the mount there.") : ""}`,
+        ? "Click to point the mount there; click a detection box to make it the primary target " +
+          "(from the keyboard: Go to, and Make primary in the detections list)."
+        : "Click to point the mount there (from the keyboard: Go to).") : ""}`,
     }, video, img, canvas);
     const state = h("span", { class: "cam-state", "data-testid": `cam-${camera}-state` }, "connecting…");
     const fig = h("figure", { class: "cam", "data-camera": camera }, frame,
