@@ -1,4 +1,5 @@
-# One command sets up and runs the operator console server on the simulated rig: `make run`.
+# One command sets up and runs the operator console server and its browser console on the simulated
+# rig: `make run`.
 # One command sets up and runs every check CI runs: `make test`.
 PY ?= python3
 VENV := .venv
@@ -8,7 +9,9 @@ HOST ?= 127.0.0.1
 PORT ?= 8080
 DATA ?= ./tmeye-data
 
-.PHONY: setup run track test lint typecheck dbcheck unit clean
+WEB_SRC := $(shell find web/src web/index.html web/vite.config.ts web/tsconfig.json web/openapi.json -type f 2>/dev/null)
+
+.PHONY: setup run track test lint typecheck dbcheck unit web clean
 
 $(STAMP): pyproject.toml
 	@$(PY) -c "import venv, ensurepip" 2>/dev/null || (apt-get update && apt-get install -y python3-venv)
@@ -17,9 +20,24 @@ $(STAMP): pyproject.toml
 	$(BIN)/pip install --quiet -e '.[dev]'
 	touch $(STAMP)
 
-setup: $(STAMP)
+# Debian's chromium for the browser tests (Playwright drives it; it never downloads a browser).
+/usr/bin/chromium:
+	apt-get update && apt-get install -y chromium
 
-run: $(STAMP)
+# The console: npm packages from the lock file, then tsc and the Vite build into web/dist.
+web/node_modules/.package-lock.json: web/package-lock.json
+	@command -v npm >/dev/null || { echo "make: npm (Node.js 20.19 or newer) is needed to build web/" >&2; exit 1; }
+	cd web && npm ci --no-audit --no-fund
+	touch $@
+
+web/dist/index.html: web/node_modules/.package-lock.json $(WEB_SRC)
+	cd web && npm run build
+
+web: web/dist/index.html
+
+setup: $(STAMP) web /usr/bin/chromium
+
+run: $(STAMP) web
 	$(BIN)/tmeye serve --host $(HOST) --port $(PORT) --data-dir $(DATA)
 
 track: $(STAMP)
@@ -36,10 +54,10 @@ dbcheck: $(STAMP)
 	@d=$$(mktemp -d) && $(BIN)/alembic -x data_dir=$$d upgrade head >/dev/null 2>&1 && \
 	$(BIN)/alembic -x data_dir=$$d check; s=$$?; rm -rf $$d; exit $$s
 
-unit: $(STAMP)
+unit: $(STAMP) web /usr/bin/chromium
 	$(BIN)/pytest
 
 test: lint typecheck dbcheck unit
 
 clean:
-	rm -rf $(VENV) build *.egg-info
+	rm -rf $(VENV) build *.egg-info web/dist web/node_modules

@@ -36,6 +36,11 @@ class LoginAnswer(BaseModel):
     csrf_token: str = Field(description="send as X-CSRF-Token with cookie-authenticated unsafe requests")
 
 
+class Me(BaseModel):
+    username: str
+    role: Role
+
+
 class Fault(BaseModel):
     kind: str
     message: str

@@ -16,7 +16,7 @@ PUBLIC = {("GET", "/api/health"), ("POST", "/api/auth/login")}
 # The role each operation needs; every operation of the document must be listed (a new route must be placed).
 ROLE = {
     ("GET", "/api/status"): "viewer", ("GET", "/api/telemetry/latest"): "viewer",
-    ("POST", "/api/auth/logout"): "viewer", ("GET", "/api/servo"): "viewer",
+    ("POST", "/api/auth/logout"): "viewer", ("GET", "/api/auth/me"): "viewer", ("GET", "/api/servo"): "viewer",
     ("PUT", "/api/servo/mode"): "operator", ("POST", "/api/servo/goto"): "operator",
     ("POST", "/api/servo/jog"): "operator", ("GET", "/api/servo/presets"): "viewer",
     ("POST", "/api/servo/presets"): "operator", ("POST", "/api/servo/presets/{preset_id}/goto"): "operator",

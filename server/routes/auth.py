@@ -8,7 +8,7 @@ from fastapi import APIRouter, Depends, HTTPException, Response
 from fastapi.security import OAuth2PasswordRequestForm
 
 from server.deps import COOKIE, CSRF_COOKIE, Address, CtxDep, DbDep, PrincipalDep
-from server.schemas import LoginAnswer, Message
+from server.schemas import LoginAnswer, Me, Message
 from server.services import auth as auth_service
 
 router = APIRouter(prefix="/api/auth", tags=["auth"])
@@ -32,6 +32,11 @@ def login(form: Annotated[OAuth2PasswordRequestForm, Depends()], response: Respo
     response.set_cookie(CSRF_COOKIE, answer.csrf_token, max_age=answer.expires_in, httponly=False,
                         samesite="strict", secure=secure, path="/")
     return answer
+
+
+@router.get("/me", response_model=Me, summary="Who is logged in: username and role")
+def me(p: PrincipalDep) -> Me:
+    return Me(username=p.user.username, role=p.user.role)  # type: ignore[arg-type]
 
 
 @router.post("/logout", status_code=204, summary="End this session: its token stops working at once")

@@ -19,7 +19,8 @@ async def _accept(ws: WebSocket) -> AppContext | None:
     ctx: AppContext = ws.app.state.ctx
     try:
         await asyncio.to_thread(websocket_principal, ws, ctx)
-    except HTTPException as exc:
+    except HTTPException as exc:  # accepted, then closed with 1008 and the reason: browsers see why
+        await ws.accept()
         await ws.close(code=1008, reason=str(exc.detail)[:120])
         return None
     await ws.accept()
