@@ -10,6 +10,7 @@ and the CPU the server process used (user + system time from /proc, in cores).""
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import json
 import os
 import re
@@ -18,6 +19,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -77,7 +79,9 @@ async def _measure(base: str, token: str, clients: int, seconds: float, warmup: 
     return {"clients": results, "status_before": s0, "status_after": s1}
 
 
-def run_server_bench(seconds: float, clients: int, warmup: float, extra: list[str]) -> dict[str, Any]:
+@contextlib.contextmanager
+def served(extra: list[str]) -> Iterator[tuple[int, str, str]]:
+    """A `tmeye serve` in a temporary data directory: (pid, base URL, admin token); stopped on exit."""
     import httpx
 
     with tempfile.TemporaryDirectory(prefix="tmeye-bench-") as tmp:
@@ -95,13 +99,34 @@ def run_server_bench(seconds: float, clients: int, warmup: float, extra: list[st
             pw = (data / "initial-admin-password").read_text().strip()
             token = httpx.post(f"{base}/api/auth/login", data={"username": "admin", "password": pw}).json()[
                 "access_token"]
-            cpu0, t0 = _cpu_s(proc.pid), time.monotonic()
-            m = asyncio.run(_measure(base, token, clients, seconds, warmup))
-            cpu = (_cpu_s(proc.pid) - cpu0) / (time.monotonic() - t0)
+            yield proc.pid, base, token
         finally:
             proc.send_signal(signal.SIGTERM)
             proc.wait(15)
+
+
+def run_server_bench(seconds: float, clients: int, warmup: float, extra: list[str]) -> dict[str, Any]:
+    with served(extra) as (pid, base, token):
+        cpu0, t0 = _cpu_s(pid), time.monotonic()
+        m = asyncio.run(_measure(base, token, clients, seconds, warmup))
+        cpu = (_cpu_s(pid) - cpu0) / (time.monotonic() - t0)
     return _report(m, seconds, cpu)
+
+
+def run_webrtc_bench(seconds: float, client_counts: list[int], extra: list[str]) -> dict[str, Any]:
+    """WebRTC viewers (aiortc) on a server with --stamp-frames: for each number of clients, the decoded
+    rate per camera, capture-to-decoded latency percentiles, and the server's CPU (cores) meanwhile."""
+    from tmeye.webrtc_client import measure
+
+    out: dict[str, Any] = {"seconds": seconds, "runs": []}
+    with served(["--stamp-frames", *extra]) as (pid, base, token):
+        time.sleep(3.0)
+        for n in client_counts:
+            cpu0, t0 = _cpu_s(pid), time.monotonic()
+            m = asyncio.run(measure(base, token, n, seconds))
+            m["server_cpu_cores"] = round((_cpu_s(pid) - cpu0) / (time.monotonic() - t0), 3)
+            out["runs"].append(m)
+    return out
 
 
 def _report(m: dict[str, Any], seconds: float, cpu: float) -> dict[str, Any]:

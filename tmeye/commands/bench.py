@@ -33,8 +33,25 @@ def register(subparsers: Any) -> None:
                         "event-loop lag, capture-to-send latency, CPU")
     p.add_argument("--seconds", type=float, default=30.0, help="--server: measurement window (default 30)")
     p.add_argument("--clients", type=int, default=10, help="--server: WebSocket clients (default 10)")
+    p.add_argument("--webrtc", metavar="N,N", help="measure WebRTC viewers instead (aiortc clients; e.g. 1,4): decoded "
+                   "fps, capture-to-decoded latency, server CPU per number of clients")
     p.add_argument("--serve-args", default="", help="--server: extra `tmeye serve` arguments, e.g. '--servo none'")
     p.set_defaults(func=run)
+
+
+def run_webrtc(args: argparse.Namespace) -> int:
+    import shlex
+
+    from tmeye.benchserver import run_webrtc_bench
+
+    try:
+        counts = [int(v) for v in args.webrtc.split(",")]
+    except ValueError:
+        counts = []
+    if not counts or not all(1 <= n <= 16 for n in counts):
+        raise UserError(f"--webrtc takes client counts 1 to 16 separated by commas, got {args.webrtc!r}")
+    emit(run_webrtc_bench(args.seconds, counts, shlex.split(args.serve_args)), args.json)
+    return 0
 
 
 def run_server(args: argparse.Namespace) -> int:
@@ -51,6 +68,8 @@ def run_server(args: argparse.Namespace) -> int:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.webrtc:
+        return run_webrtc(args)
     if args.server:
         return run_server(args)
     from tracker.bench import run_bench
