@@ -20,7 +20,7 @@ def health(ctx: CtxDep) -> Health:
     ok = rt.state == "running" and rt.latest is not None
     starting = rt.state in ("created", "starting", "running")
     status = "ok" if ok else "failed" if rt.state == "failed" else "starting" if starting else "stopped"
-    return Health(status=status, runtime=rt.state, version=__version__,  # type: ignore[arg-type]
+    return Health(status=status, runtime=rt.state, version=__version__,
                   frame=rt.latest.frame_no if rt.latest else None)
 
 

@@ -22,7 +22,7 @@ def login(db: Session, ctx: AppContext, username: str, password: str, address: s
     s = user_service.open_session(db, user, ttl, address)
     audit.record(db, user, address, "auth.login")
     db.commit()
-    return LoginAnswer(access_token=make_token(ctx.key, s.id, s.expires_at), role=user.role,  # type: ignore[arg-type]
+    return LoginAnswer(access_token=make_token(ctx.key, s.id, s.expires_at), role=user.role,
                        expires_in=ttl, csrf_token=csrf_token(ctx.key, s.id))
 
 

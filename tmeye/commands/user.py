@@ -37,7 +37,7 @@ def run_add(args: argparse.Namespace) -> int:
     from server.services.errors import Conflict, Invalid
     from server.settings import Settings
 
-    settings = Settings(**({"data_dir": Path(args.data_dir)} if args.data_dir else {}))
+    settings = Settings(data_dir=Path(args.data_dir)) if args.data_dir else Settings()
     password = _password()
     settings.data_dir.mkdir(parents=True, exist_ok=True)
     upgrade(settings.db_url)
