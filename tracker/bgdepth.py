@@ -88,6 +88,43 @@ def _remap_f32(img: F32, mx: F32, my: F32) -> F32:
     return np.asarray(cv2.remap(img, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0.0))
 
 
+def _distort_points(cam: Camera, x: F32, y: F32, z: F32) -> tuple[F32, F32]:
+    """Pixel coordinates (u, v) of camera-frame points (x, y, z) (float32, any one shape), through the
+    Brown-Conrady model of `Camera.distort_normalized` at (x_n, y_n) = (x/z, y/z):
+    x_d = x_n (1 + k₁r² + k₂r⁴ + k₃r⁶) + 2p₁x_n y_n + p₂(r² + 2x_n²), y_d = y_n (...) + p₁(r² + 2y_n²) + 2p₂x_n y_n,
+    u = f_x x_d + s y_d + c_x, v = f_y y_d + c_y. Works in place on x and y (the caller's temporaries) and
+    leaves out terms whose coefficient is zero: the same values in fewer array passes."""
+    k1, k2, p1, p2, k3 = (float(k) for k in cam.dist)
+    K = cam.K
+    xn, yn = np.divide(x, z, out=x), np.divide(y, z, out=y)
+    xx, yy, xy = xn * xn, yn * yn, xn * yn
+    r2 = xx + yy
+    radial = r2 * np.float32(k3) + np.float32(k2) if k3 else np.full_like(r2, k2)
+    radial *= r2
+    radial += np.float32(k1)
+    radial *= r2
+    radial += np.float32(1.0)  # 1 + r²(k₁ + r²(k₂ + r² k₃))
+    xx *= np.float32(2.0)
+    xx += r2
+    xx *= np.float32(p2)  # p₂(r² + 2x_n²)
+    yy *= np.float32(2.0)
+    yy += r2
+    yy *= np.float32(p1)  # p₁(r² + 2y_n²)
+    xd, yd = xn * radial, yn * radial
+    xd += xy * np.float32(2.0 * p1)
+    xd += xx
+    yd += yy
+    xy *= np.float32(2.0 * p2)
+    yd += xy
+    u = xd * np.float32(K[0, 0])
+    if K[0, 1]:
+        u += yd * np.float32(K[0, 1])
+    u += np.float32(K[0, 2])
+    yd *= np.float32(K[1, 1])
+    yd += np.float32(K[1, 2])
+    return u, yd
+
+
 class BackgroundDepth:
     """Inverse distance 1/ρ (1/m) of the static background per world direction (0 = unknown), stored on a
     virtual pinhole canvas of focal `f` pixels looking along the gimbal base's z axis."""
@@ -104,6 +141,7 @@ class BackgroundDepth:
         # per key camera: residual of eq. (9) on the surveyed empty scene, per world direction
         self.floors = (np.zeros(self.canvas.shape, np.uint8), np.zeros(self.canvas.shape, np.uint8))
         self._grids: dict[tuple[int, int], _RayGrid] = {}
+        self._homography: tuple[tuple[float, float] | None, F32] = (None, np.eye(3, dtype=np.float32))
 
     @staticmethod
     def _rays(cam: Camera) -> F32:
@@ -198,8 +236,11 @@ class BackgroundDepth:
         """Canvas coordinates (u, v) of rig-frame rays (h, w, 3) at the gimbal angles: the world direction
         w = R_world_rig ray seen by the canvas pinhole, u = f w_x / w_z + c_x, v = f w_y / w_z + c_y."""
         g = gimbal or GimbalState()
-        K = np.array([[self.f, 0.0, self.cx], [0.0, self.f, self.cy], [0.0, 0.0, 1.0]])
-        h = np.asarray(cv2.transform(rays, (K @ gimbal_rotation(g.pan_deg, g.tilt_deg)).astype(np.float32)))
+        pose = (g.pan_deg, g.tilt_deg)
+        if self._homography[0] != pose:  # K R_world_rig, kept for the frame's boxes at one pose
+            K = np.array([[self.f, 0.0, self.cx], [0.0, self.f, self.cy], [0.0, 0.0, 1.0]])
+            self._homography = (pose, (K @ gimbal_rotation(*pose)).astype(np.float32))
+        h = np.asarray(cv2.transform(rays, self._homography[1]))
         return (np.asarray(cv2.divide(h[..., 0], h[..., 2]), np.float32),
                 np.asarray(cv2.divide(h[..., 1], h[..., 2]), np.float32))
 
@@ -225,15 +266,20 @@ class BackgroundDepth:
         valid = inv > 0
         # distance along the ray from the lens centre c_k: ρ is measured from the pivot, so to first
         # order t = ρ - ray·c_k; the point is X = c_k + t ray (rig frame)
-        t = np.asarray(cv2.divide(1.0, np.where(valid, inv, np.float32(1.0))), np.float32) - g.ray_dot_c
+        t = np.asarray(cv2.divide(1.0, np.where(valid, inv, np.float32(1.0))), np.float32)
+        t -= g.ray_dot_c
         # in the other camera: X_o = R_o (X - c_o) = R_o (c_k - c_o) + t R_o ray
-        a = g.origin_other
-        x, y, z = (a[0] + t * g.dir_other[0], a[1] + t * g.dir_other[1], a[2] + t * g.dir_other[2])
+        x, y, z = (g.dir_other[i] * t for i in range(3))
+        for c, a in zip((x, y, z), g.origin_other, strict=True):
+            c += np.float32(a)
+        valid &= z > 0
         cam_r = self.rect.rig.right if key == 0 else self.rect.rig.left
-        mx, my = cam_r.distort_normalized(x / z, y / z)
+        mx, my = _distort_points(cam_r, x, y, z)
         W, H = cam_r.size
-        valid &= (z > 0) & (mx >= 0) & (my >= 0) & (mx <= W - 1) & (my <= H - 1)
+        valid &= (mx >= 0) & (my >= 0) & (mx <= W - 1) & (my <= H - 1)
         # rectified disparity f b / z_rect, z_rect = r₃·(X - c_left) = r₃·(c_k - c_left) + t r₃·ray
-        z_rect = g.origin_rect_z + t * g.dir_rect_z
-        disp = np.float32(self.rect.f * self.rect.b) / np.maximum(z_rect, np.float32(1e-3))
-        return CorrespondenceMap(np.asarray(mx, np.float32), np.asarray(my, np.float32), valid, disp, floor)
+        z_rect = np.multiply(g.dir_rect_z, t, out=t)
+        z_rect += np.float32(g.origin_rect_z)
+        disp = np.divide(np.float32(self.rect.f * self.rect.b), np.maximum(z_rect, np.float32(1e-3), out=z_rect),
+                         out=z_rect)
+        return CorrespondenceMap(mx, my, valid, disp, floor)
