@@ -71,3 +71,25 @@ def test_moving_pose_maps_equal_the_direct_computation(pipe: Pipeline, key: int)
             for name in ("map_x", "map_y"):
                 assert np.allclose(getattr(got, name)[both], getattr(want, name)[both], atol=2e-3)
             assert np.allclose(got.disparity[both], want.disparity[both], rtol=1e-4)
+
+
+def test_lazy_maps_map_only_the_missing_pixels_and_equal_direct_maps(pipe: Pipeline) -> None:
+    sub = pipe.subtractor
+    g = GimbalState(3.3, -1.2)
+    sub.maps(g)
+    sub.moving = False
+    boxes = [(100, 90, 118, 104), (110, 95, 160, 130), (100, 90, 118, 104), (0, 0, 640, 20)]
+    area = 0
+    for box in boxes:
+        for key in (0, 1):
+            got = sub.correspondence(key, g, box)
+            want = pipe.bg.correspondence(key, g, box=box)
+            assert np.array_equal(got.valid, want.valid) and np.array_equal(got.floor, want.floor)
+            for name in ("map_x", "map_y", "disparity"):
+                assert np.allclose(getattr(got, name), getattr(want, name), atol=1e-3)
+        if box == boxes[0] and area == 0:
+            area = int(sub.maps(g).full[0].done.sum())
+            assert area == 18 * 14  # the box itself, not the 32-pixel tiles around it
+    done = sub.maps(g).full[1].done
+    assert done[90:104, 100:118].all() and done[95:130, 110:160].all() and done[:20].all()
+    assert not done[200:].any()

@@ -68,10 +68,10 @@ class DetectorConfig:
 
 
 class _LazyMap:
-    """The full-resolution correspondence map of camera `key` at one pose, computed tile by tile as boxes
-    ask for it (the first frame at a new pose maps only what it verifies, not the whole image)."""
-
-    TILE = 32
+    """The full-resolution correspondence map of camera `key` at one pose, computed as boxes ask for it
+    (the first frame at a new pose maps only what it verifies, not the whole image). `done` (H, W) marks
+    the pixels mapped; a box maps the bounding box of its pixels not mapped yet (no rounding up to tiles:
+    the many small boxes of a first frame at a new pose map little more than themselves)."""
 
     def __init__(self, bg: BackgroundDepth, key: int, gimbal: GimbalState | None):
         self.bg, self.key, self.gimbal = bg, key, gimbal
@@ -79,21 +79,16 @@ class _LazyMap:
         self.size = (w, h)
         self.map = CorrespondenceMap(np.zeros((h, w), np.float32), np.zeros((h, w), np.float32),
                                      np.zeros((h, w), bool), np.zeros((h, w), np.float32), np.zeros((h, w), np.uint8))
-        t = self.TILE
-        self.done = np.zeros(((h + t - 1) // t, (w + t - 1) // t), bool)
+        self.done = np.zeros((h, w), bool)
 
     def get(self, box: Box) -> CorrespondenceMap:
         x0, y0, x1, y1 = box
-        t = self.TILE
-        tx0, ty0, tx1, ty1 = x0 // t, y0 // t, (x1 + t - 1) // t, (y1 + t - 1) // t
-        todo = ~self.done[ty0:ty1, tx0:tx1]
-        if todo.any():  # map the bounding box of the missing tiles in one go
-            ys, xs = np.nonzero(todo)
-            a, b = ty0 + int(ys.min()), ty0 + int(ys.max()) + 1
-            c, d = tx0 + int(xs.min()), tx0 + int(xs.max()) + 1
-            fill = (c * t, a * t, min(d * t, self.size[0]), min(b * t, self.size[1]))
+        todo = ~self.done[y0:y1, x0:x1]
+        rows, cols = np.flatnonzero(todo.any(axis=1)), np.flatnonzero(todo.any(axis=0))
+        if rows.size:  # map the bounding box of the missing pixels in one go
+            fill = (x0 + int(cols[0]), y0 + int(rows[0]), x0 + int(cols[-1]) + 1, y0 + int(rows[-1]) + 1)
             self.map.paste(fill, self.bg.correspondence(self.key, self.gimbal, box=fill))
-            self.done[a:b, c:d] = True
+            self.done[fill[1]:fill[3], fill[0]:fill[2]] = True
         return self.map.crop(box)
 
 
