@@ -93,3 +93,14 @@ def test_lazy_maps_map_only_the_missing_pixels_and_equal_direct_maps(pipe: Pipel
     done = sub.maps(g).full[1].done
     assert done[90:104, 100:118].all() and done[95:130, 110:160].all() and done[:20].all()
     assert not done[200:].any()
+
+
+def test_small_untracked_regions_are_not_verified_while_the_cameras_move(pipe: Pipeline) -> None:
+    ver, cfg = pipe.verifier, pipe.subtractor.cfg
+    least = cfg.moving_min_cells * cfg.stride * cfg.stride  # what a candidate box needs while moving
+    pipe.subtractor.moving = True
+    assert ver._too_small_to_be_new(least - 1, None)
+    assert not ver._too_small_to_be_new(least, None)
+    assert not ver._too_small_to_be_new(least - 1, 12.5)  # a track is predicted there: verified
+    pipe.subtractor.moving = False
+    assert not ver._too_small_to_be_new(least - 1, None)  # cameras still: every region is verified

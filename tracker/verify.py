@@ -195,9 +195,12 @@ class Verifier:
                 break
             # where the object overlaps its own ghost, Γ and Θ both show the object and may agree: holes
             m_left = _largest(m_raw, close=True)
-            if int(np.count_nonzero(m_left)) < min_area:
+            n_left = int(np.count_nonzero(m_left))
+            if n_left < min_area:
                 break
-            got = self._verify_region(frame, box, cm, m_left, _nearest_hint(hints, m_left, box), free)
+            hint = _nearest_hint(hints, m_left, box)
+            got = None if self._too_small_to_be_new(n_left, hint) else self._verify_region(frame, box, cm, m_left,
+                                                                                          hint, free)
             if got is None:
                 m_raw = m_raw & ~m_left  # not an object: try what else the box holds
                 continue
@@ -210,6 +213,13 @@ class Verifier:
             if len(found) == max_objects or int(np.count_nonzero(m_raw)) < min_area:
                 break
         return found
+
+    def _too_small_to_be_new(self, area: int, hint: float | None) -> bool:
+        """While the cameras move, a region no track is predicted in must cover moving_min_cells · stride²
+        pixels to be verified as a new object: the rule the candidate stage applies to whole boxes (a moving
+        view leaves small residuals at the background's edges), applied to each region of a box."""
+        cfg = self.cfg
+        return self.sub.moving and hint is None and area < cfg.moving_min_cells * cfg.stride * cfg.stride
 
     def _verify_region(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap, m_left: BoolA,
                        d_hint: float | None, free: BoolA) -> tuple[Blob, BoolA | None] | None:
