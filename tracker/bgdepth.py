@@ -266,7 +266,8 @@ class BackgroundDepth:
         valid = inv > 0
         # distance along the ray from the lens centre c_k: ρ is measured from the pivot, so to first
         # order t = ρ - ray·c_k; the point is X = c_k + t ray (rig frame)
-        t = np.asarray(cv2.divide(1.0, np.where(valid, inv, np.float32(1.0))), np.float32)
+        # numpy, not cv2.divide(1.0, a): OpenCV takes an (4, 1) array for a scalar and refuses the pair
+        t = np.float32(1.0) / np.where(valid, inv, np.float32(1.0)).astype(np.float32)
         t -= g.ray_dot_c
         # in the other camera: X_o = R_o (X - c_o) = R_o (c_k - c_o) + t R_o ray
         x, y, z = (g.dir_other[i] * t for i in range(3))
