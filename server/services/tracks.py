@@ -11,7 +11,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Any
 
-from sqlalchemy import select
+from sqlalchemy import insert, select
 from sqlalchemy.orm import Session, sessionmaker
 
 from server.db.models import Track, TrackPoint
@@ -98,7 +98,8 @@ def flush(sessions: sessionmaker[Session], run_id: str, book: TrackBook) -> int:
             row.width_m, row.height_m, row.min_range_m = tr.width_m, tr.height_m, tr.min_range_m
             db.flush()
             tr.db_id = row.id
-            db.add_all(TrackPoint(track_id=row.id, **p) for p in tr.pending)
+            if tr.pending:  # one executemany (Core): the ORM's per-object work would hold the GIL
+                db.execute(insert(TrackPoint), [{"track_id": row.id, **p} for p in tr.pending])
             n += len(tr.pending)
     for tr in book.tracks.values():  # committed: only now forget what was written
         tr.pending.clear()
