@@ -87,6 +87,7 @@ def test_both_cameras_play_over_webrtc_and_the_overlay_is_the_frames(server: Ser
     d1 = debug(page)
     for cam in ("left", "right"):
         rate = (d1["frames"][cam] - d0["frames"][cam]) / 3.0
+        print(f"requestVideoFrameCallback {cam}: {rate:.1f} frames/s")  # the figure; the bound is loose (CI load)
         assert rate >= 8, f"{cam} camera plays at {rate:.1f} frames/s"
         assert page.get_by_test_id(f"cam-{cam}-state").inner_text() == "WebRTC"
     assert page.get_by_test_id("sb-video").inner_text() == "Video: WebRTC"
