@@ -9,8 +9,8 @@ import time
 import pytest
 
 from tmeye.runtime import Hub, Runtime, RuntimeConfig, ServoMode, ServoRequestError, TrackerTuning
-from tmeye.runtime.compose import ComposeError, LoopingSim
-from tracker.sim.scenarios import SimRig, get_scenario
+from tmeye.runtime.compose import ComposeError
+from tracker.sim.scenarios import get_scenario
 
 
 def test_a_full_subscription_drops_its_oldest_and_counts() -> None:
@@ -46,15 +46,20 @@ def test_subscription_get_ends_when_closed() -> None:
     assert sub.get(0.1) == 1 and sub.get(0.1) is None and sub.closed
 
 
-def test_looping_sim_keeps_time_increasing() -> None:
-    sim = LoopingSim(SimRig(get_scenario("walk")))
+def test_a_finite_scenario_repeats_with_time_increasing() -> None:
     n = get_scenario("walk").frames
-    assert n is not None
-    sim.skip(n - 2)
-    frames = [sim.read() for _ in range(4)]
-    assert [f.index for f in frames if f] == [n - 2, n - 1, n, n + 1]
-    ts = [f.t for f in frames if f]
+    rt = Runtime(RuntimeConfig(scenario="walk", servo=None, realtime=False, max_frames=n + 5, loop_source=True))
+    sub = rt.hub.subscribe(maxsize=n + 10)
+    rt.start()
+    rt.join(120)
+    evs = sub.drain()
+    rt.stop()
+    assert [e.frame_no for e in evs] == list(range(n + 5))  # the second pass goes on counting
+    ts = [e.frame.t for e in evs]
     assert all(b > a for a, b in zip(ts, ts[1:], strict=False))
+    assert rt.comp is not None and rt.comp.sim is not None
+    assert rt.comp.sim.scene_t == pytest.approx(5 / get_scenario("walk").fps)  # the scene started again
+    assert all(e.telemetry["objects"] >= 1 for e in evs[n + 1:])  # and the target is seen at its start
 
 
 def test_runtime_runs_publishes_and_stops() -> None:
@@ -215,8 +220,7 @@ def test_click_to_point_centres_the_scene_point(camera: str, u: float, v: float)
         assert g is not None
         k = 0 if camera == "left" else 1
         cam = (rt.comp.rig.left, rt.comp.rig.right)[k]
-        depth = rt.comp.sim.sim.renderer.static_depth(g)[k] if hasattr(rt.comp.sim, "sim") \
-            else rt.comp.sim.renderer.static_depth(g)[k]  # type: ignore[union-attr]
+        depth = rt.comp.sim.renderer.static_depth(g)[k]
         dist = float(depth[int(v), int(u)])  # the true distance along that pixel's ray
         d = cam.rays_rig(np.array([u]), np.array([v]))[0]
         X = gimbal_rotation(g.pan_deg, g.tilt_deg) @ (cam.c + dist * d)

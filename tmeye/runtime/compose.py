@@ -17,62 +17,16 @@ from tracker.aim import AimConfig, AimController
 from tracker.closedloop import LoopConfig, ServoLoop, ServoSimSource, background_range, survey_grid, widen_background
 from tracker.closedloop_eval import closed_loop_imm, mount_range
 from tracker.evaluation import survey_poses
-from tracker.frames import FrameSource, GimbalState, StereoFrame
+from tracker.frames import FrameSource
 from tracker.geometry import StereoRig, load_rig
 from tracker.pipeline import Pipeline
 from tracker.servo import ServoError, SimulatedGimbal, open_servo
 from tracker.servo.base import AxisLimits, ServoDriver
-from tracker.sim.scenarios import SimFrame, SimRig, get_scenario
+from tracker.sim.scenarios import SimRig, get_scenario
 
 
 class ComposeError(ValueError):
     """The configuration cannot be composed into a running rig; the message is one line."""
-
-
-class LoopingSim:
-    """A finite simulated scenario repeated forever: after its last frame it starts again, while frame
-    indices and times keep increasing (the predictor, the aim controller and the simulated gimbal never
-    see time go backwards). Has SimRig's frame-source surface (index, scenario, exhausted, step, read)."""
-
-    def __init__(self, sim: SimRig):
-        self.sim = sim
-        self.scenario = sim.scenario
-        self.rig = sim.rig
-        self.index = 0
-        self._offset_frames = 0
-
-    @property
-    def exhausted(self) -> bool:
-        return False
-
-    def background(self, gimbal: GimbalState | None = None) -> StereoFrame:
-        return self.sim.background(gimbal)
-
-    def skip(self, n: int) -> None:
-        for _ in range(n):
-            self._wrap()
-            self.sim.index += 1
-            self.index += 1
-
-    def step(self, gimbal: GimbalState | None = None) -> SimFrame:
-        self._wrap()
-        sf = self.sim.step(gimbal)
-        dt = self._offset_frames / self.scenario.fps
-        f = sf.frame
-        frame = replace(f, index=self.index, t_left=f.t_left + dt, t_right=f.t_right + dt)
-        self.index += 1
-        return SimFrame(frame, sf.truth)
-
-    def read(self) -> StereoFrame | None:
-        return self.step().frame
-
-    def close(self) -> None:
-        self.sim.close()
-
-    def _wrap(self) -> None:
-        if self.sim.exhausted:
-            self._offset_frames += self.sim.index
-            self.sim.index = 0
 
 
 @dataclass
@@ -87,7 +41,7 @@ class Composition:
     loop: ServoLoop | None
     controller: AimController | None
     driver: ServoDriver | None
-    sim: SimRig | LoopingSim | None
+    sim: SimRig | None
     fps: float
     track_limits: tuple[AxisLimits, AxisLimits] | None = None  # (pan, tilt) for automatic tracking
 
@@ -122,9 +76,8 @@ def _compose_sim(cfg: RuntimeConfig, tuning: TrackerTuning, rig: StereoRig | Non
         scenario = get_scenario(cfg.scenario)
     except ValueError as exc:
         raise ComposeError(str(exc)) from None
-    raw = SimRig(scenario, seed=cfg.seed)
-    sim: SimRig | LoopingSim = LoopingSim(raw) if cfg.loop_source and not scenario.endless else raw
-    rig = rig or raw.rig
+    sim = SimRig(scenario, seed=cfg.seed)  # a finite scenario that should repeat is rewound by the runtime
+    rig = rig or sim.rig
     pipe = _pipeline(rig, cfg, tuning, scenario.fps)
     driver = _open_driver(cfg)
     source: FrameSource = sim
@@ -137,12 +90,12 @@ def _compose_sim(cfg: RuntimeConfig, tuning: TrackerTuning, rig: StereoRig | Non
             poses = survey_grid(pan, tilt)
             controller = _controller(pipe, tuning)
             track_limits = tracking_limits(controller.config, (pan, tilt))
-            source = ServoSimSource(sim, driver, lambda: controller.setpoint)  # type: ignore[arg-type]
+            source = ServoSimSource(sim, driver, lambda: controller.setpoint)
             loop = _loop(pipe, controller, driver)
         else:
             poses = survey_poses(scenario)
         for g in poses:
-            pipe.learn_background(raw.background(g))
+            pipe.learn_background(sim.background(g))
     except BaseException:
         if driver is not None:
             driver.close()
@@ -156,21 +109,21 @@ def _compose_real(cfg: RuntimeConfig, tuning: TrackerTuning, rig: StereoRig | No
     if rig is None:
         raise ComposeError(f"source {cfg.source} needs a rig file (make one with `tmeye calibrate`)")
     driver = _open_driver(cfg)
-    if isinstance(driver, SimulatedGimbal):
-        driver.close()
-        raise ComposeError("servo sim drives the simulated rig: use it with the simulated source")
     try:
-        src = open_source(cfg.source, list(cfg.inputs))
-    except SourceError as exc:
+        if isinstance(driver, SimulatedGimbal):
+            raise ComposeError("servo sim drives the simulated rig: use it with the simulated source")
+        try:
+            src = open_source(cfg.source, list(cfg.inputs))
+        except SourceError as exc:
+            raise ComposeError(str(exc)) from None
+        first = src.read()
+        if first is None:
+            src.close()
+            raise ComposeError(f"{cfg.source} source gave no frames")
+    except BaseException:
         if driver is not None:
             driver.close()
-        raise ComposeError(str(exc)) from None
-    first = src.read()
-    if first is None:
-        src.close()
-        if driver is not None:
-            driver.close()
-        raise ComposeError(f"{cfg.source} source gave no frames")
+        raise
     fps = float(getattr(src, "fps", 0.0) or 30.0)
     pipe = _pipeline(rig, cfg, tuning, fps)
     pipe.learn_background(first)  # the first pair is taken as the empty background

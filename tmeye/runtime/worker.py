@@ -229,6 +229,8 @@ class Runtime:
     def _one_frame(self) -> bool:
         comp = self.comp
         assert comp is not None
+        if comp.sim is not None and comp.config.loop_source and comp.sim.exhausted:
+            comp.sim.rewind()  # a finite scenario again from its start; frame times keep counting
         try:
             frame = comp.source.read()
         except Exception as exc:  # a camera or stream error: reported, retried after a pause
@@ -292,13 +294,9 @@ class Runtime:
         assert comp is not None
         self.skipped += n
         sim = comp.sim
-        if sim is not None:
-            if hasattr(sim, "skip"):
-                sim.skip(n)
-            elif sim.scenario.endless:
-                sim.index += n
-            else:
-                sim.index = min(sim.index + n, sim.scenario.frames)
+        if sim is not None:  # the simulator jumps ahead (a pass that ends meanwhile is rewound at the next read)
+            left = sim.scenario.frames - round(sim.scene_t * sim.scenario.fps)
+            sim.index += n if sim.scenario.endless or comp.config.loop_source else min(n, left)
         elif comp.config.source == "files":
             for _ in range(n):
                 if comp.source.read() is None:
