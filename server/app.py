@@ -65,7 +65,7 @@ def _prepare_db(settings: Settings) -> tuple[AppContext, TrackerTuning, object]:
             log.warning("created user 'admin'; its password is in %s (mode 0600)", path.resolve())
         cal_service.mark_interrupted(db)
         saved = control.saved_tuning(db)
-        rig = None if settings.rig else cal_service.active_rig(db, settings.data_dir)
+        rig = None if settings.rig else cal_service.active_rig(db)
     tuning = TrackerTuning().updated(saved) if saved else TrackerTuning()
     throttle = LoginThrottle(settings.login_user_failures, settings.login_address_failures, settings.login_window_s)
     ctx = AppContext(settings, engine, sessions, key, throttle, None, None, None, Monitor(),  # type: ignore[arg-type]

@@ -43,7 +43,7 @@ def get_record(rec_id: int, _p: Viewer, db: DbDep) -> dict[str, Any]:
              summary="Make this rig the tracker's (switches without a restart)")
 def activate(rec_id: int, ctx: CtxDep, p: Admin, db: DbDep, addr: Address) -> dict[str, Any]:
     rec = cal.get(db, rec_id)
-    cal.activate(db, ctx.runtime, rec, ctx.settings.data_dir, p.user, addr)
+    cal.activate(db, ctx.runtime, rec, p.user, addr)
     return cal.as_json(rec)
 
 

@@ -36,7 +36,7 @@ from server.services.control import Unavailable
 from server.services.errors import Conflict, Invalid, NotFound
 from server.services.events import EventBus
 from tmeye.runtime import Runtime
-from tracker.geometry import StereoRig, load_rig
+from tracker.geometry import StereoRig
 
 MAX_PAIRS = 200
 SWITCH_TIMEOUT_S = 120.0
@@ -187,27 +187,25 @@ def list_records(db: Session) -> list[Calibration]:
     return list(db.scalars(select(Calibration).order_by(Calibration.id.desc())))
 
 
-def rig_of(rec: Calibration, scratch: Path) -> StereoRig:
-    """The record's rig as a StereoRig (through the rig-file loader)."""
+def rig_of(rec: Calibration) -> StereoRig:
+    """The record's rig (the rig file's JSON, as `tmeye calibrate` wrote it)."""
     if rec.status != "done" or rec.rig is None:
         raise Conflict(f"calibration {rec.id} is {rec.status}: only a finished calibration can be used")
-    path = scratch / f"rig-{rec.id}.json"
-    path.write_text(json.dumps(rec.rig))
     try:
-        return load_rig(path)
-    finally:
-        path.unlink(missing_ok=True)
+        return StereoRig.from_dict(rec.rig)
+    except (KeyError, TypeError, AssertionError, ValueError) as exc:
+        raise Invalid(f"calibration {rec.id}'s rig is missing or has a malformed field: {exc}") from None
 
 
-def active_rig(db: Session, scratch: Path) -> StereoRig | None:
+def active_rig(db: Session) -> StereoRig | None:
     rec = db.scalar(select(Calibration).where(Calibration.active.is_(True)))
-    return None if rec is None else rig_of(rec, scratch)
+    return None if rec is None else rig_of(rec)
 
 
-def activate(db: Session, runtime: Runtime, rec: Calibration, scratch: Path, user: User, address: str) -> None:
+def activate(db: Session, runtime: Runtime, rec: Calibration, user: User, address: str) -> None:
     """Switch the runtime to the record's rig (the new pipeline learns its background first), then mark
     the record active."""
-    rig = rig_of(rec, scratch)
+    rig = rig_of(rec)
     try:
         runtime.switch_rig(rig).result(timeout=SWITCH_TIMEOUT_S)
     except FutureTimeout:
