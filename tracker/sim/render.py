@@ -8,7 +8,10 @@ applies the illumination gain and adds sensor noise from a pre-drawn bank.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from typing import TypeVar
 
 import cv2
 import numpy as np
@@ -22,6 +25,7 @@ from tracker.sim.static_cast import StaticScene
 F64 = NDArray[np.float64]
 F32 = NDArray[np.float32]
 U8 = NDArray[np.uint8]
+_T = TypeVar("_T")
 
 
 @dataclass(frozen=True)
@@ -181,7 +185,12 @@ def cast_surface_exact(view: _View, R_wr: F64, s: Surface, t: float, img: F32 | 
 
 
 class SimRenderer:
-    """Renders stereo pairs of a scene for given gimbal angles. Not thread-safe; one per worker."""
+    """Renders stereo pairs of a scene for given gimbal angles. Not thread-safe; one per worker.
+
+    The two cameras are rendered concurrently (camera 1 on a helper thread, camera 0 on the caller's):
+    OpenCV and numpy release the GIL over whole images, so a pair takes little more than one camera on
+    two cores. Random draws are made on the caller's thread, in camera order, so frames do not depend on
+    the threads' timing."""
 
     def __init__(self, rig: StereoRig, static: list[Surface], seed: int, noise_sigma: float = 1.2):
         self.rig = rig
@@ -195,12 +204,35 @@ class SimRenderer:
         self._rng = np.random.default_rng(seed + 104729)
         self.windows: list[tuple[int, int, int, int] | None] = [None, None]
         self._depth = [np.empty((h, w), np.float32) for _ in range(2)]
+        self._pool: ThreadPoolExecutor | None = None
 
     @staticmethod
     def _noise_bank(rng: np.random.Generator, h: int, w: int, sigma: float) -> tuple[U8, U8]:
         """Positive and negative parts of Gaussian noise, (h + 64, w) each, as uint8."""
         n = np.round(rng.standard_normal((h + 64, w)) * sigma).clip(-60, 60)
         return np.maximum(n, 0).astype(np.uint8), np.maximum(-n, 0).astype(np.uint8)
+
+    def _both(self, fn: Callable[[int], _T]) -> tuple[_T, _T]:
+        """fn(0) on this thread and fn(1) on the helper thread, concurrently."""
+        if self._pool is None:
+            self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="sim-render")
+        second = self._pool.submit(fn, 1)
+        try:
+            first = fn(0)
+        finally:
+            out = second.result()
+        return first, out
+
+    def _static_camera(self, k: int, R_wr: F64) -> tuple[U8, F32]:
+        """Camera k's static image (H, W) uint8 and inverse distances 1/z (1/m), (H, W) float32."""
+        view = self.views[k]
+        img, inv_z, rest = self._scene.render(k, R_wr)
+        if rest:  # what the static renderer cannot take (discs, swaying, too near), cast per pixel
+            depth = view.ray_len / inv_z
+            for surface in rest:
+                _cast_plane_fast(view, R_wr, surface, img, depth)
+            inv_z = view.ray_len / depth
+        return img, inv_z
 
     def _static(self, gimbal: GimbalState) -> tuple[list[U8], list[F32]]:
         """The static scene at a gimbal pose, per camera: the image (H, W) uint8 and the inverse 1/z (1/m)
@@ -211,20 +243,14 @@ class SimRenderer:
         if hit is not None:
             return hit
         R_wr = gimbal_rotation(gimbal.pan_deg, gimbal.tilt_deg)
-        imgs, invs = [], []
-        for k, view in enumerate(self.views):
-            img, inv_z, rest = self._scene.render(k, R_wr)
-            if rest:  # what the static renderer cannot take (discs, swaying, too near), cast per pixel
-                depth = view.ray_len / inv_z
-                for surface in rest:
-                    _cast_plane_fast(view, R_wr, surface, img, depth)
-                inv_z = view.ray_len / depth
-            imgs.append(img)
-            invs.append(inv_z)
+        pair = self._both(lambda k: self._static_camera(k, R_wr))
+        self._remember(key, ([p[0] for p in pair], [p[1] for p in pair]))
+        return self._cache[key]
+
+    def _remember(self, key: tuple[float, float], value: tuple[list[U8], list[F32]]) -> None:
         if len(self._cache) >= 4:
             self._cache.pop(next(iter(self._cache)))
-        self._cache[key] = (imgs, invs)
-        return imgs, invs
+        self._cache[key] = value
 
     def static_depth(self, gimbal: GimbalState) -> list[F32]:
         """Distance (m) along each pixel's ray to the static scene, per camera, (H, W) float32, inf where
@@ -236,26 +262,30 @@ class SimRenderer:
     def render(self, index: int, t: float, gimbal: GimbalState, moving: list[Surface], gain: float,
                noisy: bool = True) -> tuple[StereoFrame, list[U8]]:
         """Render one pair at time t (s). Returns the frame and the (left, right) id images."""
-        base_imgs, base_invs = self._static(gimbal)
+        key = (round(gimbal.pan_deg, 6), round(gimbal.tilt_deg, 6))
+        cached = self._cache.get(key)
         R_wr = gimbal_rotation(gimbal.pan_deg, gimbal.tilt_deg)
-        out: list[U8] = []
-        ids_out: list[U8] = []
-        for k in range(2):
-            img8 = base_imgs[k].copy()
+        offsets = [int(self._rng.integers(0, 64)) if noisy else 0 for _ in range(2)]
+
+        def camera(k: int) -> tuple[U8, U8, U8, F32]:
+            base_img, base_inv = (cached[0][k], cached[1][k]) if cached else self._static_camera(k, R_wr)
+            img8 = base_img.copy()
             ids = np.zeros(img8.shape, np.uint8)
             if moving:
-                self._cast_moving(k, R_wr, moving, t, img8, base_invs[k], ids)
+                self._cast_moving(k, R_wr, moving, t, img8, base_inv, ids)
             if gain != 1.0:
                 img8 = np.asarray(cv2.convertScaleAbs(img8, alpha=gain), np.uint8)
             if noisy:
                 pos, neg = self._noise[k]
-                o = int(self._rng.integers(0, 64))
-                h = img8.shape[0]
+                o, h = offsets[k], img8.shape[0]
                 img8 = np.asarray(cv2.subtract(cv2.add(img8, pos[o:o + h]), neg[63 - o:63 - o + h]), np.uint8)
-            out.append(img8)
-            ids_out.append(ids)
-        frame = StereoFrame(index, out[0], out[1], t, t, gimbal)
-        return frame, ids_out
+            return img8, ids, base_img, base_inv
+
+        left, right = self._both(camera)
+        if cached is None:
+            self._remember(key, ([left[2], right[2]], [left[3], right[3]]))
+        frame = StereoFrame(index, left[0], right[0], t, t, gimbal)
+        return frame, [left[1], right[1]]
 
     def _cast_moving(self, k: int, R_wr: F64, moving: list[Surface], t: float, img8: U8,
                      base_inv: F32, ids: U8) -> None:
