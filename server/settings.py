@@ -26,8 +26,9 @@ class Settings(BaseSettings):
     seed: int = Field(0, description="seed of the simulated scene")
     rig: str | None = Field(None, description="rig file; default: the active calibration record, "
                                               "else the simulator's own rig")
-    servo: str = Field("sim", description="servo: sim (simulated gimbal), none, or a driver URL "
-                                          "(maestro:/dev/ttyACM0, ascii:/dev/ttyUSB0)")
+    servo: str | None = Field(None, description="servo: sim (simulated gimbal), none, or a driver URL "
+                                                "(maestro:/dev/ttyACM0, ascii:/dev/ttyUSB0); default: sim with "
+                                                "the simulated source, none with a real one")
     realtime: bool = Field(True, description="pace the tracker at the source's frame rate")
     token_ttl_s: int = Field(12 * 3600, ge=60, le=30 * 86400, description="session lifetime (s)")
     cookie_secure: bool = Field(False, description="mark the session cookie Secure (set when behind HTTPS)")

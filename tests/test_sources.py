@@ -180,3 +180,58 @@ def test_factory_argument_errors() -> None:
         open_source("sim2", ["a", "b"])
     with pytest.raises(SourceError, match="needs 2 arguments"):
         open_source("files", ["only-one.mp4"])
+
+
+def write_colour_video(path: Path, n: int, size=(W, H), fmt: str = "yuv420p", codec: str = "libx264") -> Path:
+    """n frames: blue (BGR 200, 60, 20) with a red block (BGR 30, 30, 220) at the top left quarter."""
+    w, h = size
+    img = np.empty((h, w, 3), np.uint8)
+    img[:] = (200, 60, 20)
+    img[: h // 2, : w // 2] = (30, 30, 220)
+    with av.open(str(path), "w") as container:
+        stream = container.add_stream(codec, rate=FPS)
+        stream.width, stream.height = size
+        stream.pix_fmt = fmt
+        if codec == "libx264":
+            stream.options = {"preset": "ultrafast", "qp": "4"}
+        for i in range(n):
+            frame = av.VideoFrame.from_ndarray(img, format="bgr24").reformat(format=fmt)
+            frame.pts = i
+            for packet in stream.encode(frame):
+                container.mux(packet)
+        for packet in stream.encode():
+            container.mux(packet)
+    return path
+
+
+def check_colour(f: StereoFrame) -> None:
+    """The colour images are BGR (H, W, 3) of the video's colours; the tracker's images are their grey."""
+    for grey, bgr in ((f.left, f.left_colour), (f.right, f.right_colour)):
+        assert bgr is not None and bgr.shape == (H, W, 3) and bgr.dtype == np.uint8
+        assert np.abs(bgr[4, 4].astype(int) - (30, 30, 220)).max() <= 12  # red
+        assert np.abs(bgr[-4, -4].astype(int) - (200, 60, 20)).max() <= 12  # blue
+        want = cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY)
+        assert grey.shape == (H, W) and np.abs(grey.astype(int) - want.astype(int)).max() <= 1
+
+
+def test_colour_videos_keep_colour_for_viewing_and_grey_for_the_tracker(tmp_path: Path) -> None:
+    left, right = write_colour_video(tmp_path / "l.mp4", 5), write_colour_video(tmp_path / "r.mp4", 5)
+    with VideoFilePair(left, right) as src:
+        frames = read_all(src)
+    assert len(frames) == 5
+    for f in frames:
+        check_colour(f)
+    with _CapturePair(cv2.VideoCapture(str(left)), cv2.VideoCapture(str(right)), ("left", "right")) as pair:
+        frames = read_all(pair)
+    assert len(frames) == 5
+    for f in frames:
+        check_colour(f)
+
+
+def test_grey_videos_have_no_colour_images(tmp_path: Path) -> None:
+    left = write_colour_video(tmp_path / "l.mkv", 3, fmt="gray", codec="ffv1")
+    right = write_colour_video(tmp_path / "r.mkv", 3, fmt="gray", codec="ffv1")
+    with VideoFilePair(left, right) as src:
+        frames = read_all(src)
+    assert len(frames) == 3
+    assert all(f.left_colour is None and f.right_colour is None for f in frames)

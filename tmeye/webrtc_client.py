@@ -16,9 +16,10 @@ from tmeye.media.encoder import read_stamp
 class Received:
     camera: str
     frames: list[tuple[float, int, int]] = field(default_factory=list)  # (decoded at Unix s, rtp ts, stamp)
+    last_bgr: Any = None  # the last decoded image, BGR (H, W, 3), when asked for (keep_last)
 
 
-async def _consume(track: Any, rec: Received, until: float, read_stamps: bool) -> None:
+async def _consume(track: Any, rec: Received, until: float, read_stamps: bool, keep_last: bool) -> None:
     while time.monotonic() < until:
         try:
             frame = await asyncio.wait_for(track.recv(), max(until - time.monotonic(), 0.01))
@@ -27,10 +28,14 @@ async def _consume(track: Any, rec: Received, until: float, read_stamps: bool) -
         now = time.time()
         stamp = read_stamp(frame.to_ndarray(format="gray")) if read_stamps else -1
         rec.frames.append((now, int(frame.pts or 0), stamp))
+        if keep_last:
+            rec.last_bgr = frame.to_ndarray(format="bgr24")
 
 
-async def view(base_url: str, token: str, seconds: float, read_stamps: bool = True) -> list[Received]:
-    """Watch both cameras for `seconds`; returns what each camera delivered."""
+async def view(base_url: str, token: str, seconds: float, read_stamps: bool = True,
+               keep_last: bool = False) -> list[Received]:
+    """Watch both cameras for `seconds`; returns what each camera delivered (and its last image in colour,
+    with keep_last)."""
     import httpx
     from aiortc import RTCConfiguration, RTCPeerConnection, RTCSessionDescription
 
@@ -44,7 +49,7 @@ async def view(base_url: str, token: str, seconds: float, read_stamps: bool = Tr
     @pc.on("track")
     def on_track(track: Any) -> None:
         idx = len(tasks)
-        tasks.append(asyncio.ensure_future(_consume(track, recs[min(idx, 1)], until, read_stamps)))
+        tasks.append(asyncio.ensure_future(_consume(track, recs[min(idx, 1)], until, read_stamps, keep_last)))
 
     await pc.setLocalDescription(await pc.createOffer())
     async with httpx.AsyncClient(base_url=base_url, headers={"Authorization": f"Bearer {token}"}, timeout=30) as c:

@@ -30,7 +30,9 @@ class GimbalState:
 @dataclass(frozen=True)
 class StereoFrame:
     """One stereo pair. Images are grey uint8 of shape (H, W); times are seconds (monotonic clock for live
-    sources, scenario time for the simulator). `offset_s` = t_right - t_left."""
+    sources, scenario time for the simulator). `offset_s` = t_right - t_left. A colour source also keeps
+    its images in colour, BGR uint8 (H, W, 3), for viewing and recording (the tracker works on grey);
+    None for grey sources such as the simulator."""
 
     index: int
     left: U8
@@ -38,6 +40,8 @@ class StereoFrame:
     t_left: float
     t_right: float
     gimbal: GimbalState | None = None
+    left_colour: U8 | None = None
+    right_colour: U8 | None = None
 
     @property
     def t(self) -> float:

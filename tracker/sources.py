@@ -48,6 +48,17 @@ def _to_grey(img: np.ndarray) -> U8:
     return np.ascontiguousarray(img, dtype=np.uint8)
 
 
+def _to_bgr(img: np.ndarray) -> U8 | None:
+    """A colour OpenCV frame (BGR or BGRA; uint8 or uint16) -> BGR uint8 (H, W, 3); None for a grey one."""
+    if img.ndim != 3 or img.shape[2] not in (3, 4):
+        return None
+    if img.dtype == np.uint16:
+        img = (img >> 8).astype(np.uint8)
+    if img.shape[2] == 4:
+        img = cv2.cvtColor(img, cv2.COLOR_BGRA2BGR)
+    return np.ascontiguousarray(img, dtype=np.uint8)
+
+
 def _check_sizes(what: str, left: tuple[int, int], right: tuple[int, int]) -> None:
     """Raise SourceError if the left and right (width, height) differ."""
     if left != right:
@@ -92,11 +103,14 @@ class _VideoFile:
         self.size = (int(self.stream.codec_context.width), int(self.stream.codec_context.height))
         rate = self.stream.average_rate or self.stream.guessed_rate
         self.period = 1.0 / float(rate) if rate else 0.0
+        pix_fmt = str(self.stream.codec_context.pix_fmt or "")
+        self.colour = not (pix_fmt.startswith(("gray", "mono", "ya")) or pix_fmt in ("", "pal8"))
         self._frames = self.container.decode(self.stream)
         self._count = 0
 
-    def read(self) -> tuple[U8, float] | None:
-        """Next (grey image (H, W), presentation time in s), or None at the end of the file."""
+    def read(self) -> tuple[U8, float, U8 | None] | None:
+        """Next (grey image (H, W), presentation time in s, BGR image (H, W, 3) of a colour video or None),
+        or None at the end of the file."""
         try:
             frame = next(self._frames)
         except StopIteration:
@@ -107,7 +121,10 @@ class _VideoFile:
             ) from None
         t = frame.time if frame.time is not None else self._count * self.period
         self._count += 1
-        return np.ascontiguousarray(frame.to_ndarray(format="gray"), dtype=np.uint8), float(t)
+        if self.colour:
+            bgr = np.ascontiguousarray(frame.to_ndarray(format="bgr24"), dtype=np.uint8)
+            return np.asarray(cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY), np.uint8), float(t), bgr
+        return np.ascontiguousarray(frame.to_ndarray(format="gray"), dtype=np.uint8), float(t), None
 
     def close(self) -> None:
         self.container.close()
@@ -144,7 +161,8 @@ class VideoFilePair(_Base):
             return None
         if left[0].shape != right[0].shape:
             _check_sizes("video frames", left[0].shape[::-1], right[0].shape[::-1])
-        frame = StereoFrame(self._index, left[0], right[0], t_left=left[1], t_right=right[1])
+        frame = StereoFrame(self._index, left[0], right[0], t_left=left[1], t_right=right[1],
+                            left_colour=left[2], right_colour=right[2])
         self._index += 1
         return frame
 
@@ -176,7 +194,10 @@ class _CapturePair(_Base):
         gl, gr = _to_grey(np.asarray(img_l)), _to_grey(np.asarray(img_r))
         if gl.shape != gr.shape:
             _check_sizes(f"frames of {self._labels[0]} / {self._labels[1]}", gl.shape[::-1], gr.shape[::-1])
-        frame = StereoFrame(self._index, gl, gr, t_left=t_left, t_right=t_right)
+        cl, cr = _to_bgr(np.asarray(img_l)), _to_bgr(np.asarray(img_r))
+        if cl is None or cr is None:  # colour for viewing only when both cameras give it
+            cl = cr = None
+        frame = StereoFrame(self._index, gl, gr, t_left=t_left, t_right=t_right, left_colour=cl, right_colour=cr)
         self._index += 1
         return frame
 

@@ -23,7 +23,8 @@ def register(subparsers: Any) -> None:
     p.add_argument("--scenario", help="simulated scene (default endless; finite scenarios repeat)")
     p.add_argument("--seed", type=int, help="simulated scene seed")
     p.add_argument("--rig", help="rig file (default: the active calibration record, else the simulator's rig)")
-    p.add_argument("--servo", help="sim (default), none, or a driver URL (maestro:/dev/ttyACM0, ascii:/dev/ttyUSB0)")
+    p.add_argument("--servo", help="sim, none, or a driver URL (maestro:/dev/ttyACM0, ascii:/dev/ttyUSB0); "
+                   "default: sim with the simulated source, none with a real one")
     p.add_argument("--log-level", choices=("debug", "info", "warning", "error"))
     p.add_argument("--stamp-frames", action="store_true", default=None,
                    help="measurement mode: the video carries the frame index in its top-left corner")
