@@ -5,7 +5,6 @@
 from __future__ import annotations
 
 import contextlib
-import os
 import socket
 import time
 from collections.abc import Callable, Iterator
@@ -16,13 +15,10 @@ import httpx
 import pytest
 from server_helpers import ROOT, Server
 
-CHROMIUM = Path(os.environ.get("TMEYE_CHROMIUM", "/usr/bin/chromium"))
+from tmeye.benchbrowser import CHROMIUM, CHROMIUM_ARGS
+
 DIST = ROOT / "web" / "dist"
 ARTIFACTS = ROOT / "test-artifacts" / "web"
-CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                 "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                 "--allow-loopback-in-peer-connection", "--disable-features=WebRtcHideLocalIpsWithMdns",
-                 "--autoplay-policy=no-user-gesture-required"]
 PASSWORD = "correct horse battery"
 
 

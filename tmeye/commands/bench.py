@@ -35,6 +35,9 @@ def register(subparsers: Any) -> None:
     p.add_argument("--clients", type=int, default=10, help="--server: WebSocket clients (default 10)")
     p.add_argument("--webrtc", metavar="N,N", help="measure WebRTC viewers instead (aiortc clients; e.g. 1,4): decoded "
                    "fps, capture-to-decoded latency, server CPU per number of clients")
+    p.add_argument("--browser", action="store_true",
+                   help="measure the console's Live page in headless chromium instead: frames shown per second per "
+                        "camera (requestVideoFrameCallback), frames received/decoded/dropped, server CPU")
     p.add_argument("--serve-args", default="", help="--server: extra `tmeye serve` arguments, e.g. '--servo none'")
     p.set_defaults(func=run)
 
@@ -51,6 +54,20 @@ def run_webrtc(args: argparse.Namespace) -> int:
     if not counts or not all(1 <= n <= 16 for n in counts):
         raise UserError(f"--webrtc takes client counts 1 to 16 separated by commas, got {args.webrtc!r}")
     emit(run_webrtc_bench(args.seconds, counts, shlex.split(args.serve_args)), args.json)
+    return 0
+
+
+def run_browser(args: argparse.Namespace) -> int:
+    import shlex
+
+    from tmeye.benchbrowser import run_browser_bench
+
+    if not 5 <= args.seconds <= 3600:
+        raise UserError(f"--seconds must be 5 to 3600, got {args.seconds}")
+    try:
+        emit(run_browser_bench(args.seconds, shlex.split(args.serve_args)), args.json)
+    except (RuntimeError, ImportError) as exc:
+        raise UserError(f"--browser: {exc}") from None
     return 0
 
 
@@ -72,6 +89,8 @@ def run(args: argparse.Namespace) -> int:
         return run_webrtc(args)
     if args.server:
         return run_server(args)
+    if args.browser:
+        return run_browser(args)
     from tracker.bench import run_bench
     from tracker.sim.scenarios import get_scenario
 
