@@ -35,8 +35,8 @@ def chromium() -> Iterator[Any]:
 def page_of(chromium: Any, server: Server) -> Iterator[Any]:
     pages: list[Any] = []
 
-    def make(width: int = 1280, height: int = 720) -> Any:
-        p = new_page(chromium, server, width, height)
+    def make(width: int = 1280, height: int = 720, init_script: str | None = None) -> Any:
+        p = new_page(chromium, server, width, height, init_script)
         pages.append(p)
         return p
     yield make
@@ -153,6 +153,43 @@ def test_jog_by_keyboard_and_pad_moves_the_mount(server: Server, page_of: Any) -
     wait_for(lambda: page.get_by_role("button", name="Auto", exact=True).get_attribute("aria-pressed") == "true", 5,
              what="Auto pressed")
     assert _servo(server)["mode"] == "auto"
+
+
+# A gamepad the test holds: navigator.getGamepads() returns it while window.__pad.connected (the Gamepad API
+# of a headless browser has no device to report).
+FAKE_PAD = """window.__pad = {id: 'Test pad (STANDARD GAMEPAD)', index: 0, connected: false, mapping: 'standard',
+  timestamp: 0, axes: [0, 0, 0, 0],
+  buttons: Array.from({length: 17}, () => ({pressed: false, touched: false, value: 0}))};
+navigator.getGamepads = () => [window.__pad.connected ? window.__pad : null, null, null, null];"""
+
+
+def test_gamepad_stick_and_dpad_jog_the_mount(server: Server, page_of: Any) -> None:
+    page = page_of(init_script=FAKE_PAD)
+    login(page, *user(server, "gail", "operator"))
+    page.get_by_test_id("sb-telemetry").filter(has_text="Telemetry: connected").wait_for()
+    _goto(server, 0.0, 0.0)
+
+    def pan() -> float:
+        return float((debug(page).get("servo") or {}).get("pan_deg") or 0.0)
+    wait_for(lambda: abs(pan()) < 0.5, 10, what="telemetry pan near 0")
+    page.get_by_label("Jog speed").fill("20")
+    page.evaluate("window.__pad.connected = true; window.dispatchEvent(new Event('gamepadconnected'))")
+    page.get_by_test_id("gamepad").filter(has_text="Test pad").wait_for()
+    page.evaluate("window.__pad.axes[0] = 0.9")  # left stick to the right
+    page.wait_for_timeout(1500)
+    page.evaluate("window.__pad.axes[0] = 0.1")  # back inside the dead zone
+    moved = wait_for(lambda: pan() if pan() > 10 else 0, 5, what="the mount panning right")
+    page.wait_for_timeout(800)
+    settled = pan()
+    page.wait_for_timeout(700)
+    assert abs(pan() - settled) < 1.0, "the mount stops when the stick is released"
+    assert moved < 90 and _servo(server)["mode"] == "manual"
+    page.evaluate("window.__pad.buttons[14].pressed = true")  # d-pad left
+    page.wait_for_timeout(1500)
+    page.evaluate("window.__pad.buttons[14].pressed = false")
+    wait_for(lambda: pan() < settled - 10, 5, what="the mount panning left")
+    page.evaluate("window.__pad.connected = false; window.dispatchEvent(new Event('gamepaddisconnected'))")
+    page.get_by_test_id("gamepad").filter(has_text="none connected").wait_for()
 
 
 def test_tracks_page_lists_tracks_and_plots_one(server: Server, page_of: Any) -> None:
