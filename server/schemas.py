@@ -92,6 +92,8 @@ class Status(BaseModel):
     ws_delivery_ms: Percentiles = Field(description="end of the tracker's frame to WebSocket send")
     subscriptions: list[Subscription] = Field(description="each consumer of the frames: a slow one drops its "
                                                           "oldest messages, never delaying the tracker")
+    frame_gap_max_ms: float | None = Field(None, description="the longest interval between two frames the tracker "
+                                                             "published over the window (a stall), ms")
 
 
 class Detection(BaseModel):

@@ -27,8 +27,8 @@ def health(ctx: CtxDep) -> Health:
 @router.get("/status", response_model=Status, summary="Frame, rate, skipped frames, source, servo, faults")
 def get_status(ctx: CtxDep, _p: Viewer,
                window_s: Annotated[float, Query(gt=0, le=600, description="window of the lag and latency "
-                                                "percentiles (s)")] = 60.0) -> Status:
-    st = ctx.runtime.status()
+                                                "percentiles and of the longest frame gap (s)")] = 60.0) -> Status:
+    st = ctx.runtime.status(window_s)
     st["servo"] = servo_state(ctx.runtime)
     st.update(ctx.monitor.figures(window_s))
     return Status.model_validate(st)

@@ -27,6 +27,7 @@ from tmeye.runtime.config import RuntimeConfig, TrackerTuning
 from tmeye.runtime.pointing import pixel_angles
 from tmeye.runtime.publish import Hub
 from tmeye.runtime.servo import ServoControl, ServoMode
+from tmeye.runtime.stalls import StallLog
 from tmeye.runtime.telemetry import detection_json, telemetry
 from tracker.closedloop import LoopStep
 from tracker.frames import StereoFrame
@@ -101,6 +102,7 @@ class Runtime:
         self._last_done: float | None = None
         self.generation = 0
         self.source_fault: str | None = None
+        self.stalls = StallLog()
 
     # --- life cycle ----------------------------------------------------------------------------------
     def start(self, rig: StereoRig | None = None) -> None:
@@ -181,7 +183,9 @@ class Runtime:
             self.servo.controller = comp.controller
 
     # --- status --------------------------------------------------------------------------------------
-    def status(self) -> dict[str, Any]:
+    def status(self, window_s: float = 60.0) -> dict[str, Any]:
+        """The runtime's state; frame_gap_max_ms: the longest interval between published frames over the
+        last window_s seconds (an open one included)."""
         ev = self.latest
         faults: list[dict[str, str]] = []
         if self.error:
@@ -195,7 +199,9 @@ class Runtime:
                 "frames_processed": self.frames, "skipped_frames": self.skipped, "frame_errors": self.frame_errors,
                 "source": describe_source(self.comp) if self.comp else {"kind": self.config.source},
                 "servo": servo, "subscribers": self.hub.subscribers, "subscriptions": self.hub.stats(),
-                "faults": faults}
+                "faults": faults,
+                "frame_gap_max_ms": self.stalls.longest_ms(window_s, time.monotonic()) if self.state == "running"
+                else None}
 
     # --- the worker ----------------------------------------------------------------------------------
     def _run(self) -> None:
@@ -254,6 +260,7 @@ class Runtime:
             return True
         self.latest = ev
         self.hub.publish(ev)
+        self.stalls.frame(time.monotonic())
         return True
 
     def _process(self, frame: StereoFrame, captured_at: float) -> FrameEvent:
