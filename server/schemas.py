@@ -7,6 +7,8 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from server.recording_schemas import RecordingStatus
+
 Role = Literal["viewer", "operator", "admin"]
 
 
@@ -92,6 +94,8 @@ class Status(BaseModel):
     ws_delivery_ms: Percentiles = Field(description="end of the tracker's frame to WebSocket send")
     subscriptions: list[Subscription] = Field(description="each consumer of the frames: a slow one drops its "
                                                           "oldest messages, never delaying the tracker")
+    recording: RecordingStatus | None = Field(None, description="the recorder; `recording.fault` is set (and a "
+                                              "fault of kind recording listed) when recording stopped on a fault")
 
 
 class Detection(BaseModel):
