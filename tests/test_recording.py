@@ -19,8 +19,16 @@ import websockets
 from server_helpers import Server, start_server
 
 from tmeye.media.encoder import CLOCK_HZ
-from tmeye.recordcheck import (CameraFrames, check_segment, coverage, decode_stamps, probe_frames, random_times,
-                               start_pts_of, telemetry_by_pts)
+from tmeye.recordcheck import (
+    CameraFrames,
+    check_segment,
+    coverage,
+    decode_stamps,
+    probe_frames,
+    random_times,
+    start_pts_of,
+    telemetry_by_pts,
+)
 
 
 @pytest.fixture(scope="module")
