@@ -114,6 +114,8 @@ class CameraRecorder:
 
     def _write(self, ef: EncodedFrame) -> None:
         assert self.muxer is not None
+        if ef.keyframe:  # the muxer writes the finished fragment now: its frames' telemetry goes first
+            self.owner.commit_telemetry()
         try:
             self.muxer.write(ef)
         except Exception:
@@ -128,6 +130,7 @@ class CameraRecorder:
         self.muxer, self.seg_id = None, None
         if mux is None or seg_id is None:
             return
+        self.owner.commit_telemetry()
         try:
             size = mux.close()
         except Exception:
@@ -196,6 +199,11 @@ class Recorder:
             n += 1
             out = rel[:-4] + f"-{n}.mp4"
         return out
+
+    def commit_telemetry(self) -> None:
+        """Store the telemetry of the frames written so far (before a fragment reaches the file)."""
+        self._take_telemetry()
+        self._flush_telemetry()
 
     def written(self, camera: str, ef: EncodedFrame) -> None:
         self._pending.setdefault(ef.frame_no, ef.pts)
