@@ -44,9 +44,9 @@ def decode_stamps(data: bytes) -> tuple[list[tuple[int, int]], str | None]:
     """[(pts in the segment, stamp)] of an MP4 file's frames; the error that ended decoding, if any."""
     out: list[tuple[int, int]] = []
     try:
-        with av.open(io.BytesIO(data)) as c:
+        with av.open(io.BytesIO(data), "r") as c:
             for f in c.decode(video=0):
-                out.append((int(f.pts), read_stamp(f.to_ndarray(format="gray"))))
+                out.append((int(f.pts or 0), read_stamp(np.asarray(f.to_ndarray(format="gray"), np.uint8))))
     except av.error.FFmpegError as exc:
         return out, f"{type(exc).__name__}: {exc}"
     return out, None
@@ -99,12 +99,12 @@ def probe_frames(http: httpx.Client, camera: str, times: list[float], tel_times:
         if r.status_code != 200:
             bad.append({"t": t, "status": r.status_code, "detail": r.text[:200]})
             continue
-        img = cv2.imdecode(np.frombuffer(r.content, np.uint8), cv2.IMREAD_GRAYSCALE)
-        got = int(r.headers["X-Frame-Index"])
-        good = got == want and read_stamp(img) == got % 65536
+        img = np.asarray(cv2.imdecode(np.frombuffer(r.content, np.uint8), cv2.IMREAD_GRAYSCALE), np.uint8)
+        got, stamp = int(r.headers["X-Frame-Index"]), read_stamp(img)
+        good = got == want and stamp == got % 65536
         ok += good
         if not good:
-            bad.append({"t": t, "want": want, "got": got, "stamp": read_stamp(img)})
+            bad.append({"t": t, "want": want, "got": got, "stamp": stamp})
     return {"probes": len(times), "correct": ok, "median_ms": round(statistics.median(lat), 2) if lat else None,
             "p95_ms": round(sorted(lat)[int(0.95 * (len(lat) - 1))], 2) if lat else None, "wrong": bad[:5]}
 
