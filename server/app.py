@@ -18,14 +18,34 @@ from fastapi.staticfiles import StaticFiles
 from server.context import AppContext
 from server.db.engine import make_engine, session_factory, upgrade
 from server.media.webrtc import Viewers
-from server.routes import auth, calibration, errors, health, live, servo, telemetry_ws, tracker, tracks, users
+from server.routes import (
+    auth,
+    calibration,
+    errors,
+    evidence,
+    exports,
+    health,
+    live,
+    recordings,
+    servo,
+    telemetry_ws,
+    tracker,
+    tracks,
+    users,
+)
 from server.security import LoginThrottle, new_secret
 from server.services import calibration as cal_service
-from server.services import control
+from server.services import control, segments
+from server.services import exports as export_service
 from server.services import users as user_service
 from server.services.calibration import CalibrationJobs
 from server.services.events import EventBus
+from server.services.exports import ExportJobs
 from server.services.monitor import Monitor
+from server.services.playback import FrameCache
+from server.services.recorder import Recorder, RecorderConfig
+from server.services.retention import Policy
+from server.services.storage import RetentionTask
 from server.services.tracks import TrackWriter
 from server.settings import Settings
 from tmeye import __version__
@@ -55,6 +75,15 @@ def runtime_config(s: Settings) -> RuntimeConfig:
                          servo=None if servo == "none" else servo, realtime=s.realtime, loop_source=True)
 
 
+def recorder_config(s: Settings) -> RecorderConfig:
+    return RecorderConfig(s.recording, s.segment_s, s.preroll_s, s.postroll_s, s.min_free_mb)
+
+
+def retention_policy(s: Settings) -> Policy:
+    return Policy({"continuous": s.retain_continuous_days, "event": s.retain_event_days},
+                  int(s.recording_quota_mb * 1e6))
+
+
 def _prepare_db(settings: Settings) -> tuple[AppContext, TrackerTuning, object]:
     settings.data_dir.mkdir(parents=True, exist_ok=True)
     upgrade(settings.db_url)
@@ -66,8 +95,12 @@ def _prepare_db(settings: Settings) -> tuple[AppContext, TrackerTuning, object]:
         if path is not None:
             log.warning("created user 'admin'; its password is in %s (mode 0600)", path.resolve())
         cal_service.mark_interrupted(db)
+        export_service.mark_interrupted(db)
         saved = control.saved_tuning(db)
         rig = None if settings.rig else cal_service.active_rig(db)
+    fixed = segments.reconcile(sessions, settings.data_dir)
+    if any(fixed.values()):
+        log.warning("recordings reconciled after an unclean stop: %s", fixed)
     tuning = TrackerTuning().updated(saved) if saved else TrackerTuning()
     throttle = LoginThrottle(settings.login_user_failures, settings.login_address_failures, settings.login_window_s)
     ctx = AppContext(settings, engine, sessions, key, throttle, None, None, None, Monitor(),  # type: ignore[arg-type]
@@ -91,6 +124,14 @@ def create_app(settings: Settings, runtime: Runtime | None = None) -> FastAPI:
                                                       settings.mjpeg_fps, settings.mjpeg_quality))
             ctx.media.start()
             ctx.viewers = Viewers(ctx.media, settings.ice_servers)
+            ctx.recorder = Recorder(ctx.media, rt, ctx.sessions, settings.data_dir, recorder_config(settings))
+            ctx.recorder.start()
+            ctx.frames = FrameCache(settings.data_dir)
+            ctx.exports = ExportJobs(ctx.sessions, settings.data_dir)
+            retention = RetentionTask(ctx.sessions, settings.data_dir, retention_policy(settings),
+                                      settings.retention_interval_s)
+            retention_task = asyncio.create_task(retention.run(), name="retention")
+            ctx.extras["retention"] = retention
             writer = TrackWriter(rt, ctx.sessions, settings.track_sample_hz, settings.track_flush_s)
             writer_task = asyncio.create_task(writer.run(), name="track-writer")
             monitor_task = asyncio.create_task(ctx.monitor.run(), name="loop-monitor")
@@ -109,7 +150,11 @@ def create_app(settings: Settings, runtime: Runtime | None = None) -> FastAPI:
                 await ctx.viewers.close()
             if "track_writer" in ctx.extras:
                 monitor_task.cancel()
+            if "retention" in ctx.extras:
+                retention_task.cancel()
             await asyncio.to_thread(rt.stop)
+            if ctx.recorder is not None:
+                await asyncio.to_thread(ctx.recorder.stop)
             if ctx.media is not None:
                 await asyncio.to_thread(ctx.media.stop)
             if "track_writer" in ctx.extras:
@@ -117,6 +162,8 @@ def create_app(settings: Settings, runtime: Runtime | None = None) -> FastAPI:
                     await asyncio.wait_for(writer_task, 3.0)
             if ctx.calibrations is not None:
                 await ctx.calibrations.close()
+            if ctx.exports is not None:
+                await asyncio.to_thread(ctx.exports.close)
             ctx.engine.dispose()
             log.info("stopped")
 
@@ -125,7 +172,8 @@ def create_app(settings: Settings, runtime: Runtime | None = None) -> FastAPI:
                   description="Stereo tracker console API: status, telemetry, servo control, tracks, calibration, "
                               "users. Log in at /api/auth/login; send the token as `Authorization: Bearer`.")
     errors.install(app)
-    for r in (health, auth, servo, tracks, tracker, calibration, users, live, telemetry_ws):
+    for r in (health, auth, servo, tracks, tracker, calibration, users, live, telemetry_ws, recordings, evidence,
+              exports):
         app.include_router(r.router)
     if WEB_DIST.is_dir():
         app.mount("/", StaticFiles(directory=WEB_DIST, html=True), name="web")

@@ -19,6 +19,9 @@ from tmeye.runtime import Runtime
 if TYPE_CHECKING:
     from server.services.calibration import CalibrationJobs
     from server.services.events import EventBus
+    from server.services.exports import ExportJobs
+    from server.services.playback import FrameCache
+    from server.services.recorder import Recorder
 
 
 @dataclass
@@ -36,3 +39,6 @@ class AppContext:
     viewers: Viewers
     stopping: asyncio.Event
     extras: dict[str, object] = field(default_factory=dict)
+    recorder: Recorder | None = None
+    frames: FrameCache | None = None
+    exports: ExportJobs | None = None

@@ -7,6 +7,8 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from server.recording_schemas import RecordingStatus
+
 Role = Literal["viewer", "operator", "admin"]
 
 
@@ -94,6 +96,8 @@ class Status(BaseModel):
                                                           "oldest messages, never delaying the tracker")
     frame_gap_max_ms: float | None = Field(None, description="the longest interval between two frames the tracker "
                                                              "published over the window (a stall), ms")
+    recording: RecordingStatus | None = Field(None, description="the recorder; `recording.fault` is set (and a "
+                                              "fault of kind recording listed) when recording stopped on a fault")
 
 
 class Detection(BaseModel):

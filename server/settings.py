@@ -48,6 +48,21 @@ class Settings(BaseSettings):
     mjpeg_fps: float = Field(15.0, gt=0, le=60, description="MJPEG fallback frames per second")
     mjpeg_quality: int = Field(80, ge=1, le=100, description="MJPEG fallback JPEG quality")
     ice_servers: list[str] = Field(default_factory=list, description="STUN/TURN URLs for WebRTC (none by default)")
+    recording: str = Field("continuous", description="recording mode: continuous, events (footage around "
+                                                     "detections, with pre- and post-roll) or off")
+    segment_s: float = Field(10.0, ge=2.0, le=600.0, description="length of a recorded segment (s); each starts on "
+                                                                "a keyframe")
+    preroll_s: float = Field(5.0, ge=0.0, le=60.0, description="events mode: footage kept from before a detection (s)")
+    postroll_s: float = Field(5.0, ge=0.0, le=600.0, description="events mode: footage kept after the last "
+                                                                "detection (s)")
+    retain_continuous_days: float = Field(7.0, gt=0, description="continuous footage older than this is deleted "
+                                                                "(days; locked footage is kept)")
+    retain_event_days: float = Field(30.0, gt=0, description="event footage older than this is deleted (days)")
+    recording_quota_mb: float = Field(0.0, ge=0, description="disk quota of the recordings (MB; 0: none); the "
+                                                             "oldest unlocked segments go first")
+    min_free_mb: float = Field(1024.0, ge=0, description="recording stops with a fault while the disk holding the "
+                                                         "data directory has less free space than this (MB)")
+    retention_interval_s: float = Field(60.0, gt=0, le=86400, description="how often retention runs (s)")
     log_level: str = Field("info", description="debug, info, warning or error")
 
     @field_validator("source")
@@ -55,6 +70,13 @@ class Settings(BaseSettings):
     def _source(cls, v: str) -> str:
         if v not in ("sim", "files", "usb", "rtsp"):
             raise ValueError(f"unknown source {v!r}; use sim, files, usb or rtsp")
+        return v
+
+    @field_validator("recording")
+    @classmethod
+    def _recording(cls, v: str) -> str:
+        if v not in ("continuous", "events", "off"):
+            raise ValueError(f"unknown recording mode {v!r}; use continuous, events or off")
         return v
 
     @field_validator("log_level")
@@ -75,6 +97,10 @@ class Settings(BaseSettings):
     @property
     def db_path(self) -> Path:
         return self.data_dir / "tmeye.db"
+
+    @property
+    def recordings_dir(self) -> Path:
+        return self.data_dir / "recordings"
 
     @property
     def db_url(self) -> str:

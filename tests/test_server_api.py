@@ -30,6 +30,13 @@ ROLE = {
     ("GET", "/api/live/{camera}.mjpeg"): "viewer",
     ("GET", "/api/users"): "admin", ("POST", "/api/users"): "admin", ("PATCH", "/api/users/{user_id}"): "admin",
     ("DELETE", "/api/users/{user_id}"): "admin", ("GET", "/api/audit"): "admin",
+    ("GET", "/api/recordings"): "viewer", ("GET", "/api/recordings/{seg_id}/file"): "viewer",
+    ("GET", "/api/playback/frame"): "viewer", ("GET", "/api/playback/{camera}.m3u8"): "viewer",
+    ("GET", "/api/telemetry"): "viewer", ("GET", "/api/locks"): "viewer", ("POST", "/api/locks"): "operator",
+    ("DELETE", "/api/locks/{lock_id}"): "admin", ("GET", "/api/bookmarks"): "viewer",
+    ("POST", "/api/bookmarks"): "operator", ("DELETE", "/api/bookmarks/{bookmark_id}"): "operator",
+    ("POST", "/api/exports"): "operator", ("GET", "/api/exports"): "operator",
+    ("GET", "/api/exports/{export_id}"): "operator", ("GET", "/api/exports/{export_id}/download"): "operator",
 }
 RANK = {"viewer": 0, "operator": 1, "admin": 2}
 
@@ -50,6 +57,8 @@ def tokens(server: Server) -> dict[str, str]:
 def _call(c: httpx.Client, method: str, path: str) -> httpx.Response:
     url = path.replace("{preset_id}", "999999").replace("{track_id}", "999999").replace("{rec_id}", "999999") \
         .replace("{user_id}", "999999").replace("{camera}", "left")
+    for name in ("seg_id", "lock_id", "bookmark_id", "export_id"):
+        url = url.replace("{" + name + "}", "999999")
     if url.endswith(".mjpeg"):  # a stream that never ends: its status line is enough
         with c.stream(method, url) as r:
             return r

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from sqlalchemy import JSON, Boolean, Float, ForeignKey, Index, Integer, String, Text
+from sqlalchemy import JSON, BigInteger, Boolean, Float, ForeignKey, Index, Integer, String, Text
 from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column
 
 
@@ -133,3 +133,84 @@ class ServoPreset(Base):
     tilt_deg: Mapped[float] = mapped_column(Float)
     created_at: Mapped[float] = mapped_column(Float)
     created_by: Mapped[int | None] = mapped_column(ForeignKey("users.id", ondelete="SET NULL"), nullable=True)
+
+
+class Segment(Base):
+    """One camera's recorded segment file (DATA-relative `path`): written when it opens (status open), completed
+    when it closes (closed) or corrected at start-up after a crash (cut). start / end: capture times (Unix s) of
+    its first and last frame; start_pts: the first frame's 90 kHz capture clock; frame_offsets: each frame's pts
+    minus start_pts (ticks), frame_nos: each frame's runtime index; keyframes: keyframe times in the segment (s)."""
+
+    __tablename__ = "segments"
+    __table_args__ = (Index("ix_segments_camera_start", "camera", "start"),)
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    camera: Mapped[str] = mapped_column(String(8))
+    kind: Mapped[str] = mapped_column(String(16))  # continuous or event
+    path: Mapped[str] = mapped_column(String(256), unique=True)
+    status: Mapped[str] = mapped_column(String(8))  # open, closed or cut
+    start: Mapped[float] = mapped_column(Float, index=True)
+    end: Mapped[float | None] = mapped_column(Float, nullable=True, index=True)
+    start_pts: Mapped[int] = mapped_column(BigInteger)
+    frames: Mapped[int] = mapped_column(Integer, default=0)
+    bytes: Mapped[int] = mapped_column(BigInteger, default=0)
+    keyframes: Mapped[list[Any]] = mapped_column(JSON, default=list)
+    frame_offsets: Mapped[list[Any]] = mapped_column(JSON, default=list)
+    frame_nos: Mapped[list[Any]] = mapped_column(JSON, default=list)
+
+
+class RecordedFrame(Base):
+    """The telemetry of one recorded frame (the whole per-frame message: frame index, capture time, detections,
+    servo state), keyed by the frame's 90 kHz capture clock, which is also its time in every segment holding it."""
+
+    __tablename__ = "recorded_frames"
+
+    pts: Mapped[int] = mapped_column(BigInteger, primary_key=True, autoincrement=False)
+    frame_no: Mapped[int] = mapped_column(Integer)
+    captured_at: Mapped[float] = mapped_column(Float, index=True)
+    data: Mapped[dict[str, Any]] = mapped_column(JSON)
+
+
+class EvidenceLock(Base):
+    """Footage kept until an admin unlocks it: a time range (Unix s), or a track's (then track_id is set)."""
+
+    __tablename__ = "evidence_locks"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    start: Mapped[float] = mapped_column(Float)
+    end: Mapped[float] = mapped_column(Float)
+    track_id: Mapped[int | None] = mapped_column(ForeignKey("tracks.id", ondelete="SET NULL"), nullable=True)
+    note: Mapped[str] = mapped_column(Text, default="")
+    created_at: Mapped[float] = mapped_column(Float)
+    created_by: Mapped[int | None] = mapped_column(ForeignKey("users.id", ondelete="SET NULL"), nullable=True)
+
+
+class Bookmark(Base):
+    """A moment of the recordings (Unix s) with a note."""
+
+    __tablename__ = "bookmarks"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    t: Mapped[float] = mapped_column(Float, index=True)
+    note: Mapped[str] = mapped_column(Text)
+    created_at: Mapped[float] = mapped_column(Float)
+    created_by: Mapped[int | None] = mapped_column(ForeignKey("users.id", ondelete="SET NULL"), nullable=True)
+
+
+class Export(Base):
+    """An export job: status queued, running, done or failed; progress 0 to 1; `path` (DATA-relative) the zip."""
+
+    __tablename__ = "exports"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    status: Mapped[str] = mapped_column(String(16))
+    progress: Mapped[float] = mapped_column(Float, default=0.0)
+    start: Mapped[float] = mapped_column(Float)
+    end: Mapped[float] = mapped_column(Float)
+    cameras: Mapped[list[Any]] = mapped_column(JSON)
+    path: Mapped[str | None] = mapped_column(String(256), nullable=True)
+    bytes: Mapped[int | None] = mapped_column(BigInteger, nullable=True)
+    error: Mapped[str | None] = mapped_column(Text, nullable=True)
+    created_at: Mapped[float] = mapped_column(Float)
+    created_by: Mapped[int | None] = mapped_column(ForeignKey("users.id", ondelete="SET NULL"), nullable=True)
+    finished_at: Mapped[float | None] = mapped_column(Float, nullable=True)

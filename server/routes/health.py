@@ -30,6 +30,10 @@ def get_status(ctx: CtxDep, _p: Viewer,
                                                 "percentiles and of the longest frame gap (s)")] = 60.0) -> Status:
     st = ctx.runtime.status(window_s)
     st["servo"] = servo_state(ctx.runtime)
+    if ctx.recorder is not None:
+        st["recording"] = ctx.recorder.status()
+        if st["recording"]["fault"]:
+            st["faults"].append({"kind": "recording", "message": st["recording"]["fault"]})
     st.update(ctx.monitor.figures(window_s))
     return Status.model_validate(st)
 

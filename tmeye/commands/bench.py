@@ -38,6 +38,14 @@ def register(subparsers: Any) -> None:
     p.add_argument("--browser", action="store_true",
                    help="measure the console's Live page in headless chromium instead: frames shown per second per "
                         "camera (requestVideoFrameCallback), frames received/decoded/dropped, server CPU")
+    p.add_argument("--recording", action="store_true",
+                   help="measure recording instead: frames in exactly one segment per camera over --seconds, "
+                        "stamps against telemetry, /api/playback/frame at --probes random times, the worker's "
+                        "frame-time cost of recording, --kills SIGKILL restarts")
+    p.add_argument("--probes", type=int, default=100, help="--recording: random playback times (default 100)")
+    p.add_argument("--kills", type=int, default=20, help="--recording: SIGKILLs at random moments (default 20)")
+    p.add_argument("--cost-seconds", type=float, default=20.0,
+                   help="--recording: seconds per with/without-recorder round of the worker cost (0: skip)")
     p.add_argument("--serve-args", default="", help="--server: extra `tmeye serve` arguments, e.g. '--servo none'")
     p.set_defaults(func=run)
 
@@ -84,7 +92,23 @@ def run_server(args: argparse.Namespace) -> int:
     return 0
 
 
+def run_recording(args: argparse.Namespace) -> int:
+    import shlex
+
+    from tmeye.benchrecording import run_recording_bench
+
+    if not 10 <= args.seconds <= 7200:
+        raise UserError(f"--seconds must be 10 to 7200 for --recording, got {args.seconds}")
+    if not 1 <= args.probes <= 10000 or not 0 <= args.kills <= 1000 or not 0 <= args.cost_seconds <= 600:
+        raise UserError("--probes must be 1 to 10000, --kills 0 to 1000, --cost-seconds 0 to 600")
+    emit(run_recording_bench(args.seconds, args.probes, args.kills, args.cost_seconds, shlex.split(args.serve_args)),
+         args.json)
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
+    if args.recording:
+        return run_recording(args)
     if args.webrtc:
         return run_webrtc(args)
     if args.server:

@@ -1,0 +1,122 @@
+"""Pydantic models of the recording, playback, evidence and export API. Times are Unix seconds (UTC)."""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+Camera = Literal["left", "right"]
+
+
+class Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class SegmentOut(BaseModel):
+    model_config = ConfigDict(from_attributes=True, json_schema_extra={"examples": [
+        {"id": 12, "camera": "left", "kind": "continuous", "status": "closed", "start": 1795376480.0,
+         "end": 1795376490.0, "frames": 301, "bytes": 1893321, "keyframes": [0.0, 1.5, 3.0],
+         "path": "recordings/2026-11-22/22/left/41.20.mp4"}]})
+
+    id: int
+    camera: Camera
+    kind: Literal["continuous", "event"]
+    status: Literal["open", "closed", "cut"] = Field(description="open: being written; cut: repaired after a crash")
+    start: float = Field(description="capture time of the first frame")
+    end: float | None = Field(description="capture time of the last frame (null while open)")
+    frames: int
+    bytes: int
+    keyframes: list[float] = Field(description="keyframe times in the segment (s)")
+    path: str = Field(description="relative to the data directory")
+
+
+class RecordingStatus(BaseModel):
+    mode: Literal["continuous", "events", "off"]
+    state: Literal["recording", "idle", "off", "fault"]
+    fault: str | None = Field(description="device fault: why recording stopped (e.g. the free-disk floor)")
+    segments: int = Field(description="segments closed since start")
+    frames: dict[str, int]
+    bytes: int
+    errors: int
+    dropped_packets: int
+    telemetry_rows: int
+    telemetry_missing: int
+
+
+class LockIn(Strict):
+    """A time range, or a track (its first to last sighting)."""
+
+    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
+        {"start": 1795376480.0, "end": 1795376540.0, "note": "intrusion at the gate"}, {"track_id": 42}]})
+
+    start: float | None = None
+    end: float | None = None
+    track_id: int | None = None
+    note: str = Field("", max_length=2000)
+
+    @model_validator(mode="after")
+    def _one_kind(self) -> LockIn:
+        if self.track_id is None and (self.start is None or self.end is None):
+            raise ValueError("give start and end, or track_id")
+        if self.track_id is not None and (self.start is not None or self.end is not None):
+            raise ValueError("give start and end, or track_id, not both")
+        if self.start is not None and self.end is not None and not self.end > self.start:
+            raise ValueError("end must be after start")
+        return self
+
+
+class LockOut(BaseModel):
+    model_config = ConfigDict(from_attributes=True)
+
+    id: int
+    start: float
+    end: float
+    track_id: int | None
+    note: str
+    created_at: float
+    created_by: int | None
+
+
+class BookmarkIn(Strict):
+    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [{"t": 1795376486.8, "note": "van"}]})
+
+    t: float
+    note: str = Field(min_length=1, max_length=2000)
+
+
+class BookmarkOut(BaseModel):
+    model_config = ConfigDict(from_attributes=True)
+
+    id: int
+    t: float
+    note: str
+    created_at: float
+    created_by: int | None
+
+
+class ExportIn(Strict):
+    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
+        {"start": 1795376480.0, "end": 1795376540.0, "cameras": ["left", "right"]}]})
+
+    start: float
+    end: float
+    cameras: list[Camera] = Field(default=["left", "right"], min_length=1, max_length=2)
+
+
+class ExportOut(BaseModel):
+    model_config = ConfigDict(from_attributes=True)
+
+    id: int
+    status: Literal["queued", "running", "done", "failed"]
+    progress: float = Field(description="0 to 1")
+    start: float
+    end: float
+    cameras: list[str]
+    bytes: int | None
+    error: str | None
+    created_at: float
+    finished_at: float | None
+
+
+TelemetryRecord = dict[str, Any]

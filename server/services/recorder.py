@@ -1,0 +1,290 @@
+"""The recorder: the media pipeline's H.264 packets (no second encoder) -> fragmented MP4 segments per camera,
+with the telemetry of every recorded frame, in its own thread (never the tracker's, never the event loop).
+
+Modes: continuous; events (footage from `preroll_s` before a frame with detections, from a ring buffer of
+packets that always starts on a keyframe, to `postroll_s` after the last one); off. A segment ends at the
+first keyframe after `segment_s` (the recorder asks the encoder for one then), so every segment starts on a
+keyframe. While the disk holding the data directory has less than `min_free_mb` free, nothing is written and
+the status carries the fault (tracking goes on).
+"""
+
+from __future__ import annotations
+
+import logging
+import shutil
+import threading
+import time
+from collections import OrderedDict, deque
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from sqlalchemy.orm import Session, sessionmaker
+
+from server.services import segments
+from tmeye.media.encoder import CLOCK_HZ, EncodedFrame
+from tmeye.media.fmp4 import SegmentMuxer
+from tmeye.media.pipeline import CAMERAS, MediaPipeline
+from tmeye.runtime import Runtime
+from tmeye.runtime.publish import Subscription
+
+log = logging.getLogger("tmeye.recording")
+DISK_CHECK_S = 2.0
+TELEMETRY_FLUSH_S = 1.0
+KEY_LEAD_S = 0.02  # ask for the next segment's keyframe this long before the segment's length is reached
+
+
+@dataclass(frozen=True)
+class RecorderConfig:
+    """mode: continuous, events or off; times in seconds; min_free_mb: the free-disk floor (MB)."""
+
+    mode: str = "continuous"
+    segment_s: float = 10.0
+    preroll_s: float = 5.0
+    postroll_s: float = 5.0
+    min_free_mb: float = 1024.0
+
+
+def segment_path(camera: str, captured_at: float) -> str:
+    """recordings/YYYY-MM-DD/HH/{camera}/MM.SS.mp4 of a segment starting at `captured_at` (UTC)."""
+    g = time.gmtime(captured_at)
+    return f"recordings/{time.strftime('%Y-%m-%d', g)}/{g.tm_hour:02d}/{camera}/{g.tm_min:02d}.{g.tm_sec:02d}.mp4"
+
+
+class CameraRecorder:
+    """One camera's packets -> its open segment, or the pre-roll ring while nothing is being recorded."""
+
+    def __init__(self, camera: str, owner: Recorder):
+        self.camera, self.owner = camera, owner
+        self.ring: deque[EncodedFrame] = deque()
+        self.muxer: SegmentMuxer | None = None
+        self.seg_id: int | None = None
+        self.asked_key = False
+        self.segments = self.frames = self.bytes = self.errors = 0
+
+    def feed(self, ef: EncodedFrame, wanted: bool, kind: str) -> None:
+        if self.muxer is not None and not wanted:
+            self.close()
+        if self.muxer is None:
+            self._buffer(ef)
+            if wanted:
+                self._open_from_ring(kind)
+            return
+        elapsed = (ef.pts - self.muxer.start_pts) / CLOCK_HZ
+        if ef.keyframe and (self.asked_key or elapsed >= self.owner.config.segment_s):
+            self.close()  # the keyframe asked for (or a natural one past the length) starts the next segment
+            self._buffer(ef)
+            self._open_from_ring(kind)
+            return
+        if elapsed >= self.owner.config.segment_s - KEY_LEAD_S and not self.asked_key:
+            self.owner.media.request_keyframe(self.camera)
+            self.asked_key = True
+        self._write(ef)
+
+    def _buffer(self, ef: EncodedFrame) -> None:
+        """Keep packets from the newest keyframe at least `preroll_s` old (a decodable pre-roll)."""
+        if not self.ring and not ef.keyframe:
+            self.owner.media.request_keyframe(self.camera)
+            return
+        self.ring.append(ef)
+        horizon = ef.captured_at - self.owner.config.preroll_s
+        keys = [i for i, p in enumerate(self.ring) if p.keyframe and p.captured_at <= horizon]
+        for _ in range(keys[-1] if keys else 0):
+            self.ring.popleft()
+
+    def _open_from_ring(self, kind: str) -> None:
+        if not self.ring:
+            return
+        first = self.ring.popleft()
+        rel = self.owner.free_path(segment_path(self.camera, first.captured_at))
+        self.seg_id = segments.open_row(self.owner.sessions, self.camera, kind, rel, first.captured_at, first.pts)
+        try:
+            self.muxer = SegmentMuxer(self.owner.data_dir / rel, first)
+        except Exception:
+            self.errors += 1
+            log.exception("%s: cannot open segment %s", self.camera, rel)
+            segments.delete_row(self.owner.sessions, self.seg_id)
+            self.seg_id, self.muxer = None, None
+            self.ring.clear()
+            return
+        self.asked_key = False
+        self.owner.written(self.camera, first)
+        while self.ring:
+            self._write(self.ring.popleft())
+
+    def _write(self, ef: EncodedFrame) -> None:
+        assert self.muxer is not None
+        if ef.keyframe:  # the muxer writes the finished fragment now: its frames' telemetry goes first
+            self.owner.commit_telemetry()
+        try:
+            self.muxer.write(ef)
+        except Exception:
+            self.errors += 1
+            log.exception("%s: writing frame %d failed; segment closed", self.camera, ef.frame_no)
+            self.close()
+            return
+        self.owner.written(self.camera, ef)
+
+    def close(self) -> None:
+        mux, seg_id = self.muxer, self.seg_id
+        self.muxer, self.seg_id = None, None
+        if mux is None or seg_id is None:
+            return
+        self.owner.commit_telemetry()
+        try:
+            size = mux.close()
+        except Exception:
+            self.errors += 1
+            log.exception("%s: closing %s failed (start-up reconciliation will repair it)", self.camera, mux.path)
+            return
+        segments.close_row(self.owner.sessions, seg_id, size=size, offsets=mux.offsets, frame_nos=mux.frame_nos,
+                           keyframes=mux.keyframes)
+        self.segments += 1
+        self.frames += len(mux.offsets)
+        self.bytes += size
+
+
+class Recorder:
+    """Start after the media pipeline; stop before it (the open segments are closed and their rows completed)."""
+
+    def __init__(self, media: MediaPipeline, runtime: Runtime, sessions: sessionmaker[Session], data_dir: Path,
+                 config: RecorderConfig):
+        self.media, self.runtime, self.sessions, self.data_dir = media, runtime, sessions, data_dir
+        self.config = config
+        self.cameras = {c: CameraRecorder(c, self) for c in CAMERAS}
+        self.fault: str | None = None
+        self.last_event: float | None = None
+        self.telemetry_rows = self.telemetry_missing = 0
+        self._telemetry: OrderedDict[int, dict[str, Any]] = OrderedDict()
+        self._pending: dict[int, int] = {}  # frame_no -> pts of written frames whose telemetry is not stored yet
+        self._stop = threading.Event()
+        self._wake = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._subs: dict[str, Subscription[EncodedFrame]] = {}
+        self._tm_sub: Subscription[Any] | None = None
+
+    def start(self) -> None:
+        if self.config.mode == "off":
+            return
+        wake = self._wake.set
+        self._tm_sub = self.runtime.hub.subscribe(maxsize=90, notify=wake, name="recorder")
+        self._subs = {c: self.media.packets[c].subscribe(maxsize=300, notify=wake, name=f"recorder-{c}")
+                      for c in CAMERAS}
+        self.media.recorders += 1
+        self._thread = threading.Thread(target=self._run, name="tmeye-recorder", daemon=True)
+        self._thread.start()
+
+    def stop(self, timeout: float = 5.0) -> None:
+        self._stop.set()
+        self._wake.set()
+        if self._thread is not None:
+            self._thread.join(timeout)
+            self.media.recorders -= 1
+
+    def status(self) -> dict[str, Any]:
+        state = "off" if self.config.mode == "off" else "fault" if self.fault else \
+            "recording" if any(c.muxer is not None for c in self.cameras.values()) else "idle"
+        return {"mode": self.config.mode, "state": state, "fault": self.fault,
+                "segments": sum(c.segments for c in self.cameras.values()),
+                "frames": {n: c.frames for n, c in self.cameras.items()},
+                "bytes": sum(c.bytes for c in self.cameras.values()),
+                "errors": sum(c.errors for c in self.cameras.values()),
+                "dropped_packets": sum(s.dropped for s in self._subs.values()),
+                "telemetry_rows": self.telemetry_rows, "telemetry_missing": self.telemetry_missing}
+
+    def free_path(self, rel: str) -> str:
+        """`rel`, or with a -N suffix when a segment of the same second already exists."""
+        n, out = 0, rel
+        while (self.data_dir / out).exists():
+            n += 1
+            out = rel[:-4] + f"-{n}.mp4"
+        return out
+
+    def commit_telemetry(self) -> None:
+        """Store the telemetry of the frames written so far (before a fragment reaches the file)."""
+        self._take_telemetry()
+        self._flush_telemetry()
+
+    def written(self, camera: str, ef: EncodedFrame) -> None:
+        self._pending.setdefault(ef.frame_no, ef.pts)
+
+    # --- the thread ----------------------------------------------------------------------------------
+    def _run(self) -> None:
+        next_disk = next_flush = 0.0
+        try:
+            while not self._stop.is_set():
+                self._wake.wait(0.2)
+                self._wake.clear()
+                now = time.monotonic()
+                if now >= next_disk:
+                    self._check_disk()
+                    next_disk = now + DISK_CHECK_S
+                self._take_telemetry()
+                self._take_packets()
+                if now >= next_flush:
+                    self._flush_telemetry()
+                    next_flush = now + TELEMETRY_FLUSH_S
+        except Exception:
+            log.exception("recorder stopped")
+            self.fault = "recorder stopped after an error (see the log)"
+        finally:
+            self._take_telemetry()
+            self._take_packets()
+            for cam in self.cameras.values():
+                cam.close()
+            self._flush_telemetry(final=True)
+            for c, sub in self._subs.items():
+                self.media.packets[c].unsubscribe(sub)
+            if self._tm_sub is not None:
+                self.runtime.hub.unsubscribe(self._tm_sub)
+
+    def _take_telemetry(self) -> None:
+        assert self._tm_sub is not None
+        for ev in self._tm_sub.drain():
+            self._telemetry[ev.frame_no] = ev.telemetry
+            if ev.telemetry.get("detections"):
+                self.last_event = ev.captured_at
+        while len(self._telemetry) > 900:
+            self._telemetry.popitem(last=False)
+
+    def _wanted(self, t: float) -> bool:
+        if self.fault:
+            return False
+        if self.config.mode == "continuous":
+            return True
+        return self.last_event is not None and t <= self.last_event + self.config.postroll_s
+
+    def _take_packets(self) -> None:
+        kind = "continuous" if self.config.mode == "continuous" else "event"
+        for c, sub in self._subs.items():
+            for ef in sub.drain():
+                self.cameras[c].feed(ef, self._wanted(ef.captured_at), kind)
+
+    def _flush_telemetry(self, final: bool = False) -> None:
+        rows, keep = [], {}
+        for frame_no, pts in self._pending.items():
+            tm = self._telemetry.get(frame_no)
+            if tm is not None:
+                rows.append({"pts": pts, "frame_no": frame_no, "captured_at": pts / CLOCK_HZ, "data": tm})
+            elif not final and frame_no > max(self._telemetry, default=0):
+                keep[frame_no] = pts  # its telemetry has not come yet
+            else:
+                self.telemetry_missing += 1
+        self._pending = keep
+        try:
+            self.telemetry_rows += segments.save_telemetry(self.sessions, rows)
+        except Exception:
+            log.exception("storing %d telemetry rows failed", len(rows))
+
+    def _check_disk(self) -> None:
+        self.data_dir.mkdir(parents=True, exist_ok=True)
+        free_mb = shutil.disk_usage(self.data_dir).free / 1e6
+        floor = self.config.min_free_mb
+        if self.fault is None and free_mb < floor:
+            self.fault = f"free disk space {free_mb:.0f} MB is below the floor of {floor:.0f} MB: recording stopped"
+            log.error("recording stopped: %s", self.fault)
+            for cam in self.cameras.values():
+                cam.close()
+        elif self.fault is not None and self.fault.startswith("free disk") and free_mb >= floor * 1.05 + 50:
+            log.warning("free disk space %.0f MB: recording again", free_mb)
+            self.fault = None
