@@ -21,6 +21,8 @@ def test_two_minute_soak_serves_every_client_throughout() -> None:
     print(json.dumps(s))
     assert s["states"] == ["running"] and s["rest_errors"] == [] and s["rest_requests"] > 100
     assert len(report["samples"]) == 12
+    rec = s["recording"]  # recording on (the default): segments closed, no fault
+    assert rec is not None and rec["segments"] >= 4 and rec["fault"] is None and rec["errors"] == 0
     assert len(s["ws_messages_per_s"]) == 10 and min(s["ws_messages_per_s"]) > 5  # each client kept receiving
     assert len(s["webrtc_frames_per_s"]) == 4 and min(s["webrtc_frames_per_s"]) > 5
     for row in report["samples"]:

@@ -82,10 +82,18 @@ async def _sampler(http: Any, pid: int, t0: float, until: float, every: float, o
         st = (await http.get("/api/status", params={"window_s": every})).json()
         row = {"t_s": round(time.monotonic() - t0, 1), **proc_figures(pid), "frame": st["frame"],
                "skipped_frames": st["skipped_frames"], "loop_lag_p99_ms": st["event_loop_lag_ms"].get("p99"),
-               "frame_gap_max_ms": st.get("frame_gap_max_ms"), "state": st["state"]}
+               "frame_gap_max_ms": st.get("frame_gap_max_ms"), "state": st["state"],
+               "recording": _recording(st.get("recording"))}
         row["skipped_in_interval"] = row["skipped_frames"] - (last["skipped_frames"] if last else 0)
         out.append(row)
         last = row
+
+
+def _recording(rec: dict[str, Any] | None) -> dict[str, Any] | None:
+    """The recorder's state, segments closed, errors and fault (None when the server does not record)."""
+    if not rec:
+        return None
+    return {k: rec.get(k) for k in ("state", "segments", "errors", "dropped_packets", "fault")}
 
 
 async def _soak(pid: int, base: str, token: str, seconds: float, webrtc: int, ws: int,
@@ -133,6 +141,7 @@ def summarise(samples: list[dict[str, Any]], load: Load, seconds: float) -> dict
         "webrtc_frames_per_s": [round(n / (seconds + GRACE_S) / 2, 1) for n in load.webrtc_frames],  # per camera
         "rest_requests": load.rest_requests, "rest_errors": load.rest_errors[:20],
         "states": sorted({s["state"] for s in samples}),
+        "recording": samples[-1].get("recording"),
     }
 
 
