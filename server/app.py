@@ -14,14 +14,16 @@ from pathlib import Path
 from fastapi import FastAPI
 from fastapi.staticfiles import StaticFiles
 
+from server.alarms.faults import FaultThresholds
 from server.context import AppContext
 from server.db.engine import make_engine, session_factory, upgrade
 from server.media.webrtc import Viewers
-from server.routes import auth, calibration, errors, health, live, servo, telemetry_ws, tracker, tracks, users
+from server.routes import alarms, auth, calibration, errors, health, live, servo, telemetry_ws, tracker, tracks, users
 from server.security import LoginThrottle, new_secret
 from server.services import calibration as cal_service
 from server.services import control
 from server.services import users as user_service
+from server.services.alarms import AlarmOptions, AlarmService, counter_probe
 from server.services.calibration import CalibrationJobs
 from server.services.events import EventBus
 from server.services.monitor import Monitor
@@ -51,6 +53,11 @@ def load_key(data_dir: Path) -> bytes:
 def runtime_config(s: Settings) -> RuntimeConfig:
     return RuntimeConfig(source=s.source, inputs=tuple(s.inputs), scenario=s.scenario, seed=s.seed, rig=s.rig,
                          servo=None if s.servo == "none" else s.servo, realtime=s.realtime, loop_source=True)
+
+
+def alarm_options(s: Settings) -> AlarmOptions:
+    return AlarmOptions(FaultThresholds(s.alarm_stall_s, s.alarm_fps_floor, disk_min_bytes=s.alarm_disk_min_mb * 2**20),
+                        max_shelve_s=s.alarm_max_shelve_h * 3600.0)
 
 
 def _prepare_db(settings: Settings) -> tuple[AppContext, TrackerTuning, object]:
@@ -93,12 +100,18 @@ def create_app(settings: Settings, runtime: Runtime | None = None) -> FastAPI:
             writer_task = asyncio.create_task(writer.run(), name="track-writer")
             monitor_task = asyncio.create_task(ctx.monitor.run(), name="loop-monitor")
             ctx.extras["track_writer"] = writer
+            ctx.alarms = AlarmService(rt, ctx.sessions, ctx.events, settings.data_dir, alarm_options(settings),
+                                      run_id=lambda: f"{writer.run_id}.{rt.generation}")
+            ctx.alarms.probes["database"] = counter_probe(lambda: writer.errors, "writing tracks failed")
+            await asyncio.to_thread(ctx.alarms.start)
             app.state.ctx = ctx
             log.info("tracker running: %s", rt.status()["source"])
             yield
         finally:
             log.info("stopping")
             ctx.stopping.set()
+            if ctx.alarms is not None:
+                await asyncio.to_thread(ctx.alarms.stop)
             if ctx.viewers is not None:
                 await ctx.viewers.close()
             if "track_writer" in ctx.extras:
@@ -119,7 +132,7 @@ def create_app(settings: Settings, runtime: Runtime | None = None) -> FastAPI:
                   description="Stereo tracker console API: status, telemetry, servo control, tracks, calibration, "
                               "users. Log in at /api/auth/login; send the token as `Authorization: Bearer`.")
     errors.install(app)
-    for r in (health, auth, servo, tracks, tracker, calibration, users, live, telemetry_ws):
+    for r in (health, auth, servo, tracks, tracker, calibration, users, live, telemetry_ws, alarms):
         app.include_router(r.router)
     if WEB_DIST.is_dir():
         app.mount("/", StaticFiles(directory=WEB_DIST, html=True), name="web")

@@ -17,6 +17,7 @@ from tmeye.media.pipeline import MediaPipeline
 from tmeye.runtime import Runtime
 
 if TYPE_CHECKING:
+    from server.services.alarms import AlarmService
     from server.services.calibration import CalibrationJobs
     from server.services.events import EventBus
 
@@ -36,3 +37,4 @@ class AppContext:
     viewers: Viewers
     stopping: asyncio.Event
     extras: dict[str, object] = field(default_factory=dict)
+    alarms: AlarmService = None  # type: ignore[assignment]  # set by the lifespan

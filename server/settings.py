@@ -47,6 +47,15 @@ class Settings(BaseSettings):
     mjpeg_fps: float = Field(15.0, gt=0, le=60, description="MJPEG fallback frames per second")
     mjpeg_quality: int = Field(80, ge=1, le=100, description="MJPEG fallback JPEG quality")
     ice_servers: list[str] = Field(default_factory=list, description="STUN/TURN URLs for WebRTC (none by default)")
+    alarm_stall_s: float = Field(0.5, gt=0, le=60, description="a camera with no new frame for longer is stalled "
+                                                               "(device-fault alarm, s)")
+    alarm_fps_floor: float = Field(10.0, ge=0, le=240, description="frame-rate fault below this many frames per "
+                                                                   "second (over 3 s)")
+    alarm_disk_min_mb: int = Field(500, ge=0, description="disk-space fault below this many MiB free in the data "
+                                                          "directory")
+    alarm_max_shelve_h: float = Field(8.0, gt=0, le=168, description="the longest an alarm may be shelved (h)")
+    alarm_preroll_s: float = Field(5.0, ge=0, le=600, description="an alarm's playback link starts this long "
+                                                                  "before its activation (s)")
     log_level: str = Field("info", description="debug, info, warning or error")
 
     @field_validator("source")

@@ -186,3 +186,22 @@ def test_condition_json_round_trip_and_errors() -> None:
                      ({"kind": "teleport"}, "kind must be")]:
         with pytest.raises(ValueError, match=msg):
             condition_from_dict(bad)
+
+
+def test_device_faults_from_health() -> None:
+    from server.alarms.faults import FaultThresholds, Health, device_faults
+
+    th = FaultThresholds(stall_s=0.5, fps_floor=10.0, disk_min_bytes=100)
+    ok = Health(now=100.0, runtime_state="running", last_frame_at=99.9, up_s=50, frame_rate=30.0,
+                disk_free_bytes=1000)
+    assert device_faults(ok, th) == {}
+    stalled = device_faults(Health(now=100.0, runtime_state="running", last_frame_at=99.2, up_s=50,
+                                   frame_rate=3.0), th)
+    assert set(stalled) == {"camera"} and "no frame for 0.8 s" in stalled["camera"]
+    assert "gone: OSError" in device_faults(Health(100.0, "running", source_fault="OSError: x", up_s=9), th)["camera"]
+    assert "ended" in device_faults(Health(100.0, "ended", up_s=9), th)["camera"]
+    slow = device_faults(Health(100.0, "running", last_frame_at=100.0, up_s=9, frame_rate=7.5, servo="lost",
+                                recording="disk full", database="locked", disk_free_bytes=10), th)
+    assert set(slow) == {"frame_rate", "servo", "recording", "database", "disk"}
+    assert device_faults(Health(100.0, "running", up_s=2.0), th) == {}  # the first frame may take a while
+    assert "no frame 6.0 s after the start" in device_faults(Health(100.0, "running", up_s=6.0), th)["camera"]

@@ -30,6 +30,11 @@ ROLE = {
     ("GET", "/api/live/{camera}.mjpeg"): "viewer",
     ("GET", "/api/users"): "admin", ("POST", "/api/users"): "admin", ("PATCH", "/api/users/{user_id}"): "admin",
     ("DELETE", "/api/users/{user_id}"): "admin", ("GET", "/api/audit"): "admin",
+    ("GET", "/api/alarm-rules"): "viewer", ("POST", "/api/alarm-rules"): "admin",
+    ("PATCH", "/api/alarm-rules/{rule_id}"): "admin", ("DELETE", "/api/alarm-rules/{rule_id}"): "admin",
+    ("GET", "/api/alarms"): "viewer", ("GET", "/api/alarms/summary"): "viewer",
+    ("GET", "/api/alarms/{alarm_id}"): "viewer", ("POST", "/api/alarms/{alarm_id}/ack"): "operator",
+    ("POST", "/api/alarms/{alarm_id}/shelve"): "operator", ("POST", "/api/alarms/{alarm_id}/unshelve"): "operator",
 }
 RANK = {"viewer": 0, "operator": 1, "admin": 2}
 
@@ -49,7 +54,8 @@ def tokens(server: Server) -> dict[str, str]:
 
 def _call(c: httpx.Client, method: str, path: str) -> httpx.Response:
     url = path.replace("{preset_id}", "999999").replace("{track_id}", "999999").replace("{rec_id}", "999999") \
-        .replace("{user_id}", "999999").replace("{camera}", "left")
+        .replace("{user_id}", "999999").replace("{camera}", "left").replace("{alarm_id}", "999999") \
+        .replace("{rule_id}", "999999")
     if url.endswith(".mjpeg"):  # a stream that never ends: its status line is enough
         with c.stream(method, url) as r:
             return r

@@ -73,6 +73,7 @@ class Transition:
     target_id: int | None = None
     message: str | None = None
     priority: str | None = None
+    until: float | None = None  # shelved: the time the shelving ends
 
     def as_dict(self) -> dict[str, Any]:
         return dict(vars(self))
@@ -130,6 +131,20 @@ class AlarmEngine:
         if p is None or p.occurrence is None:
             return []
         return [self._close(p, t, "removed", "normal", user)]
+
+    def restore(self, key: str, state: str, shelved_until: float | None = None, reason: str | None = None
+                ) -> int | None:
+        """Take back an open alarm kept from an earlier run (unack, ack, rtn_unack or shelved): its new
+        occurrence number, or None when the rule is gone or the state is not an open one. The condition is
+        evaluated afresh: an alarm whose condition no longer holds clears after its off-delay."""
+        p = self.points.get(key)
+        if p is None or state not in ("unack", "ack", "rtn_unack", "shelved") or p.state == "out_of_service":
+            return None
+        p.occurrence, self._next = self._next, self._next + 1
+        p.state, p.active = state, state != "rtn_unack"
+        p.raw, p.raw_since = p.active, None
+        p.shelved_until, p.shelve_reason = (shelved_until, reason) if state == "shelved" else (None, None)
+        return p.occurrence
 
     # --- evaluation -----------------------------------------------------------------------------------
     def step(self, snap: Snapshot) -> list[Transition]:
@@ -209,7 +224,7 @@ class AlarmEngine:
         p.shelved_until, p.shelve_reason = t + minutes * 60.0, reason.strip()
         old, p.state = p.state, "shelved"
         return [Transition("shelved", t, key, p.occurrence, old, "shelved", user=user, comment=reason.strip(),
-                           priority=p.rule.priority)]
+                           priority=p.rule.priority, until=p.shelved_until)]
 
     def unshelve(self, key: str, t: float, user: str | None) -> list[Transition]:
         p = self.point(key)
