@@ -15,10 +15,12 @@ from pathlib import Path
 from fastapi import FastAPI
 from fastapi.staticfiles import StaticFiles
 
+from server.alarms.faults import FaultThresholds
 from server.context import AppContext
 from server.db.engine import make_engine, session_factory, upgrade
 from server.media.webrtc import Viewers
 from server.routes import (
+    alarms,
     auth,
     calibration,
     errors,
@@ -38,6 +40,7 @@ from server.services import calibration as cal_service
 from server.services import control, segments
 from server.services import exports as export_service
 from server.services import users as user_service
+from server.services.alarms import AlarmOptions, AlarmService, counter_probe
 from server.services.calibration import CalibrationJobs
 from server.services.events import EventBus
 from server.services.exports import ExportJobs
@@ -82,6 +85,11 @@ def recorder_config(s: Settings) -> RecorderConfig:
 def retention_policy(s: Settings) -> Policy:
     return Policy({"continuous": s.retain_continuous_days, "event": s.retain_event_days},
                   int(s.recording_quota_mb * 1e6))
+
+
+def alarm_options(s: Settings) -> AlarmOptions:
+    return AlarmOptions(FaultThresholds(s.alarm_stall_s, s.alarm_fps_floor, disk_min_bytes=int(s.min_free_mb * 2**20)),
+                        max_shelve_s=s.alarm_max_shelve_h * 3600.0)
 
 
 def _prepare_db(settings: Settings) -> tuple[AppContext, TrackerTuning, object]:
@@ -136,6 +144,12 @@ def create_app(settings: Settings, runtime: Runtime | None = None) -> FastAPI:
             writer_task = asyncio.create_task(writer.run(), name="track-writer")
             monitor_task = asyncio.create_task(ctx.monitor.run(), name="loop-monitor")
             ctx.extras["track_writer"] = writer
+            ctx.alarms = AlarmService(rt, ctx.sessions, ctx.events, settings.data_dir, alarm_options(settings),
+                                      run_id=lambda: f"{writer.run_id}.{rt.generation}")
+            ctx.alarms.probes["database"] = counter_probe(lambda: writer.errors, "writing tracks failed")
+            recorder = ctx.recorder
+            ctx.alarms.probes["recording"] = lambda: recorder.fault
+            await asyncio.to_thread(ctx.alarms.start)
             app.state.ctx = ctx
             log.info("tracker running: %s", rt.status()["source"])
             # the start-up objects (188,000: modules, the app, the runtime) leave the collector: a full collection
@@ -146,6 +160,8 @@ def create_app(settings: Settings, runtime: Runtime | None = None) -> FastAPI:
         finally:
             log.info("stopping")
             ctx.stopping.set()
+            if ctx.alarms is not None:
+                await asyncio.to_thread(ctx.alarms.stop)
             if ctx.viewers is not None:
                 await ctx.viewers.close()
             if "track_writer" in ctx.extras:
@@ -173,7 +189,7 @@ def create_app(settings: Settings, runtime: Runtime | None = None) -> FastAPI:
                               "users. Log in at /api/auth/login; send the token as `Authorization: Bearer`.")
     errors.install(app)
     for r in (health, auth, servo, tracks, tracker, calibration, users, live, telemetry_ws, recordings, evidence,
-              exports):
+              exports, alarms):
         app.include_router(r.router)
     if WEB_DIST.is_dir():
         app.mount("/", StaticFiles(directory=WEB_DIST, html=True), name="web")

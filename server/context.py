@@ -17,6 +17,7 @@ from tmeye.media.pipeline import MediaPipeline
 from tmeye.runtime import Runtime
 
 if TYPE_CHECKING:
+    from server.services.alarms import AlarmService
     from server.services.calibration import CalibrationJobs
     from server.services.events import EventBus
     from server.services.exports import ExportJobs
@@ -42,3 +43,4 @@ class AppContext:
     recorder: Recorder | None = None
     frames: FrameCache | None = None
     exports: ExportJobs | None = None
+    alarms: AlarmService = None  # type: ignore[assignment]  # set by the lifespan

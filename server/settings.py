@@ -63,6 +63,13 @@ class Settings(BaseSettings):
     min_free_mb: float = Field(1024.0, ge=0, description="recording stops with a fault while the disk holding the "
                                                          "data directory has less free space than this (MB)")
     retention_interval_s: float = Field(60.0, gt=0, le=86400, description="how often retention runs (s)")
+    alarm_stall_s: float = Field(0.5, gt=0, le=60, description="a camera with no new frame for longer is stalled "
+                                                               "(device-fault alarm, s)")
+    alarm_fps_floor: float = Field(10.0, ge=0, le=240, description="frame-rate fault below this many frames per "
+                                                                   "second (over 3 s)")
+    alarm_max_shelve_h: float = Field(8.0, gt=0, le=168, description="the longest an alarm may be shelved (h)")
+    alarm_preroll_s: float = Field(5.0, ge=0, le=600, description="an alarm's playback link starts this long "
+                                                                  "before its activation (s)")
     log_level: str = Field("info", description="debug, info, warning or error")
 
     @field_validator("source")

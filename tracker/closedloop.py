@@ -57,7 +57,9 @@ class LoopConfig:
     latency model (s); None: the running median of the last `latency_window` measured ones (wall clock).
     centroid_sigma_px / disparity_sigma_px: floors of the 1-σ used for the predictor's measurement (the
     pipeline's own σ assume a perfect calibration). retry_interval_s: while the driver reports a fault,
-    commands are attempted at most this often (s)."""
+    commands are attempted at most this often (s). keepalive_s: a real (serial) driver that was sent nothing
+    for this long is asked for its position, so a port that vanished while the mount stood still is
+    reported as a fault within about this time (s)."""
 
     lead_s: float = 0.09
     latency_s: float | None = None
@@ -65,6 +67,7 @@ class LoopConfig:
     centroid_sigma_px: float = 0.3
     disparity_sigma_px: float = 0.05
     retry_interval_s: float = 1.0
+    keepalive_s: float = 0.5
 
 
 @dataclass(frozen=True)
@@ -157,6 +160,8 @@ class ServoLoop:
         cmd = self.controller.step(AimInput(frame.t, frame.gimbal, pred, None if est is None else est.state,
                                             centroid))
         cmd = self._send(frame, cmd)
+        if cmd is None:
+            self._keepalive()
         t_cmd = time.perf_counter()
         self._latencies.append(t_cmd - t_have)
         fault = None if self.driver is None else self.driver.fault
@@ -174,6 +179,17 @@ class ServoLoop:
         drv.command(cmd.pan_deg, cmd.tilt_deg)
         self._last_attempt = time.monotonic()
         return cmd
+
+    def _keepalive(self) -> None:
+        """Ask a real driver for its position when nothing was sent for keepalive_s (a fault shows up)."""
+        drv = self.driver
+        if drv is None or isinstance(drv, SimulatedGimbal):
+            return
+        now = time.monotonic()
+        wait = self.config.retry_interval_s if drv.fault is not None else self.config.keepalive_s
+        if now - self._last_attempt >= wait:
+            self._last_attempt = now
+            drv.read_position()
 
 
 class ServoSimSource:

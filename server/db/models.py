@@ -214,3 +214,68 @@ class Export(Base):
     created_at: Mapped[float] = mapped_column(Float)
     created_by: Mapped[int | None] = mapped_column(ForeignKey("users.id", ondelete="SET NULL"), nullable=True)
     finished_at: Mapped[float | None] = mapped_column(Float, nullable=True)
+
+
+class AlarmRule(Base):
+    """An alarm rule made by an admin: a condition in metres (JSON, see server.alarms.conditions), a
+    priority (critical, high, medium, low), on- and off-delays (s), enabled and out-of-service flags."""
+
+    __tablename__ = "alarm_rules"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    name: Mapped[str] = mapped_column(String(128))
+    priority: Mapped[str] = mapped_column(String(16))
+    condition: Mapped[dict[str, Any]] = mapped_column(JSON)
+    on_delay_s: Mapped[float] = mapped_column(Float)
+    off_delay_s: Mapped[float] = mapped_column(Float)
+    enabled: Mapped[bool] = mapped_column(Boolean)
+    out_of_service: Mapped[bool] = mapped_column(Boolean)
+    created_at: Mapped[float] = mapped_column(Float)
+    created_by: Mapped[int | None] = mapped_column(ForeignKey("users.id", ondelete="SET NULL"), nullable=True)
+    updated_at: Mapped[float] = mapped_column(Float)
+
+
+class Alarm(Base):
+    """One alarm occurrence: from its activation until it is normal again (acknowledged and cleared),
+    shelved out or taken out of service. rule_key: "rule:<id>" or "fault:<source>"; state: unack, ack,
+    rtn_unack, shelved, out_of_service or normal; run_id and target_id name the triggering track."""
+
+    __tablename__ = "alarms"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    rule_id: Mapped[int | None] = mapped_column(ForeignKey("alarm_rules.id", ondelete="SET NULL"), nullable=True)
+    rule_key: Mapped[str] = mapped_column(String(64))
+    name: Mapped[str] = mapped_column(String(128))
+    priority: Mapped[str] = mapped_column(String(16))
+    state: Mapped[str] = mapped_column(String(16), index=True)
+    activated_at: Mapped[float] = mapped_column(Float, index=True)
+    cleared_at: Mapped[float | None] = mapped_column(Float, nullable=True)
+    acked_at: Mapped[float | None] = mapped_column(Float, nullable=True)
+    acked_by: Mapped[str | None] = mapped_column(String(64), nullable=True)
+    updated_at: Mapped[float] = mapped_column(Float)
+    frame: Mapped[int | None] = mapped_column(Integer, nullable=True)
+    target_id: Mapped[int | None] = mapped_column(Integer, nullable=True)
+    run_id: Mapped[str | None] = mapped_column(String(40), nullable=True)
+    message: Mapped[str | None] = mapped_column(Text, nullable=True)
+    shelved_until: Mapped[float | None] = mapped_column(Float, nullable=True)
+    shelve_reason: Mapped[str | None] = mapped_column(Text, nullable=True)
+
+
+class AlarmEvent(Base):
+    """One transition of an alarm: when, what (activated, cleared, acknowledged, shelved, unshelved,
+    out_of_service, removed), the states, who (None: the engine), the comment, the frame and target."""
+
+    __tablename__ = "alarm_events"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    alarm_id: Mapped[int] = mapped_column(ForeignKey("alarms.id", ondelete="CASCADE"), index=True)
+    at: Mapped[float] = mapped_column(Float)
+    kind: Mapped[str] = mapped_column(String(32))
+    state_from: Mapped[str | None] = mapped_column(String(16), nullable=True)
+    state_to: Mapped[str | None] = mapped_column(String(16), nullable=True)
+    user_id: Mapped[int | None] = mapped_column(ForeignKey("users.id", ondelete="SET NULL"), nullable=True)
+    username: Mapped[str | None] = mapped_column(String(64), nullable=True)
+    comment: Mapped[str | None] = mapped_column(Text, nullable=True)
+    frame: Mapped[int | None] = mapped_column(Integer, nullable=True)
+    target_id: Mapped[int | None] = mapped_column(Integer, nullable=True)
+    message: Mapped[str | None] = mapped_column(Text, nullable=True)

@@ -22,6 +22,9 @@ def register(subparsers: Any) -> None:
     p.add_argument("--seed", type=int, default=0, help="random seed of the simulated scene (default 0)")
     p.add_argument("--rig", help="rig file the tracker uses instead of the simulator's true rig")
     p.add_argument("--epsilon", type=int, help="eq. (9) threshold ε in grey levels (default 12)")
+    p.add_argument("--alarms", action="store_true", help="alarm rules (zone, range, approach) on the endless "
+                   "scene against its true target positions (with --minutes, --seed)")
+    p.add_argument("--minutes", type=float, default=10.0, help="simulated minutes of --alarms (default 10)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
 
@@ -40,8 +43,17 @@ def run(args: argparse.Namespace) -> int:
         for name, desc in names.items():
             print(f"{name:14s} {desc}")
         return 0
+    if args.alarms:
+        if args.scenario or args.frames is not None or args.rig or args.epsilon is not None:
+            raise UserError("--alarms runs the endless scene: give only --minutes, --seed and --json with it")
+        if not 0 < args.minutes <= 600:
+            raise UserError(f"--minutes must be above 0 and at most 600, got {args.minutes:g}")
+        from tmeye.alarm_eval import evaluate_alarms
+
+        emit(evaluate_alarms(args.minutes, args.seed, progress=Progress("eval alarms")), True)
+        return 0
     if not args.scenario:
-        raise UserError("give --scenario NAME (or --list)")
+        raise UserError("give --scenario NAME, --alarms or --list")
     if args.scenario not in names:
         raise UserError(f"unknown scenario {args.scenario!r}; known: {', '.join(names)}")
     if args.frames is not None and args.frames < 1:

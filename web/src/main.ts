@@ -1,6 +1,8 @@
 // The console's shell: session check, navigation (hash routes), one module per page, the status bar.
 import "./styles.css";
 import { ApiError, onUnauthorized } from "./api/client";
+import { alarmCenter } from "./lib/alarms";
+import { AlarmBanner } from "./lib/banner";
 import { h } from "./lib/dom";
 import { atLeast, current, forget, logout, type Session } from "./lib/session";
 import { StatusBar } from "./lib/statusbar";
@@ -21,7 +23,7 @@ const ROUTES: Route[] = [
   { name: "live", label: "Live", load: () => import("./pages/live").then((m) => m.livePage) },
   { name: "playback", label: "Playback", soon: "Playback of recorded video comes with its own issue." },
   { name: "tracks", label: "Tracks", load: () => import("./pages/tracks").then((m) => m.tracksPage) },
-  { name: "alarms", label: "Alarms", soon: "Alarms come with their own issue." },
+  { name: "alarms", label: "Alarms", load: () => import("./pages/alarms").then((m) => m.alarmsPage) },
   { name: "calibration", label: "Calibration", load: () => import("./pages/calibration").then((m) => m.calibrationPage) },
   { name: "settings", label: "Settings", load: () => import("./pages/settings").then((m) => m.settingsPage) },
   { name: "users", label: "Users", role: "admin", load: () => import("./pages/users").then((m) => m.usersPage) },
@@ -37,10 +39,11 @@ const nav = h("nav", { class: "nav", "aria-label": "Pages" });
 const who = h("span", { class: "who", "data-testid": "who" });
 const logoutBtn = h("button", { type: "button", class: "link" }, "Log out");
 const main = h("main", { id: "main", tabindex: -1 });
+const banner = new AlarmBanner(alarmCenter);
 const shell = h("div", { class: "shell" },
   h("header", { class: "topbar" }, h("a", { class: "brand", href: "#/live" }, "TMEye"), nav,
     h("div", { class: "account" }, who, logoutBtn)),
-  main, status.el);
+  banner.el, main, status.el);
 
 logoutBtn.addEventListener("click", async () => {
   await logout();
@@ -97,6 +100,7 @@ function showLogin(message?: string): void {
   page = null;
   session = null;
   status.stop();
+  alarmCenter.stop();
   document.title = "Log in · TMEye";
   renderLogin(app, (s) => {
     session = s;
@@ -108,6 +112,7 @@ function enter(): void {
   who.textContent = `${session!.username} (${session!.role})`;
   app.replaceChildren(shell);
   status.start();
+  alarmCenter.start();
   void showPage();
 }
 

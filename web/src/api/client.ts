@@ -2,7 +2,7 @@
 // header (the readable tmeye_csrf cookie, or the csrf_token of the login answer). Errors become ApiError
 // with the server's one-line `detail`; a 401 also tells the app that the session is gone.
 import type {
-  AuditOut, CalibrationOut, GotoRequest, Health, JogRequest, LoginAnswer, PointRequest, Preset, PresetIn,
+  AlarmDetail, AlarmOut, AlarmRuleIn, AlarmRuleOut, AlarmRulePatch, AlarmSummary, AuditOut, CalibrationOut, GotoRequest, Health, JogRequest, LoginAnswer, PointRequest, Preset, PresetIn,
   ServoMode, ServoStatus, SessionDescription, Status, Telemetry, TrackDetail, TrackOut, TrackerSettings,
   TrackerSettingsPatch, UserIn, UserOut, UserPatch, WebRtcConfig,
 } from "./types";
@@ -158,6 +158,20 @@ export const api = {
   deleteUser: (id: number) => request<void>("DELETE", `/api/users/${id}`),
   audit: (q: { start?: number; end?: number; action?: string; limit?: number }) =>
     get<AuditOut[]>("/api/audit", { query: q }),
+
+  alarms: (state?: string, since?: number, limit?: number) =>
+    get<AlarmOut[]>("/api/alarms", { query: { state, since, limit } }),
+  alarm: (id: number) => get<AlarmDetail>(`/api/alarms/${id}`),
+  alarmSummary: () => get<AlarmSummary>("/api/alarms/summary"),
+  ackAlarm: (id: number, comment: string | null) => post<AlarmOut>(`/api/alarms/${id}/ack`, { comment }),
+  shelveAlarm: (id: number, minutes: number, reason: string) =>
+    post<AlarmOut>(`/api/alarms/${id}/shelve`, { minutes, reason }),
+  unshelveAlarm: (id: number) => post<AlarmOut>(`/api/alarms/${id}/unshelve`),
+  alarmRules: () => get<AlarmRuleOut[]>("/api/alarm-rules"),
+  createAlarmRule: (b: AlarmRuleIn) => post<AlarmRuleOut>("/api/alarm-rules", b),
+  patchAlarmRule: (id: number, b: AlarmRulePatch) =>
+    request<AlarmRuleOut>("PATCH", `/api/alarm-rules/${id}`, { body: b }),
+  deleteAlarmRule: (id: number) => request<void>("DELETE", `/api/alarm-rules/${id}`),
 
   webrtcConfig: () => get<WebRtcConfig>("/api/webrtc/config", { timeoutMs: 5000 }),
   webrtcOffer: (offer: SessionDescription) =>

@@ -72,6 +72,23 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/auth/me": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /** Who is logged in: username and role */
+        get: operations["me_api_auth_me_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/api/auth/logout": {
         parameters: {
             query?: never;
@@ -468,10 +485,153 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/alarm-rules": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /** Alarm rules */
+        get: operations["list_rules_api_alarm_rules_get"];
+        put?: never;
+        /** Create a rule (zone, range_below, approach, size or lost) */
+        post: operations["create_rule_api_alarm_rules_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/alarm-rules/{rule_id}": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        post?: never;
+        /** Delete a rule */
+        delete: operations["delete_rule_api_alarm_rules__rule_id__delete"];
+        options?: never;
+        head?: never;
+        /** Change a rule; out_of_service takes it out of service or back */
+        patch: operations["patch_rule_api_alarm_rules__rule_id__patch"];
+        trace?: never;
+    };
+    "/api/alarms": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /** Alarms by priority then time, newest first */
+        get: operations["list_alarms_api_alarms_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/alarms/summary": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /** Open alarms per priority, flood state */
+        get: operations["summary_api_alarms_summary_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/alarms/{alarm_id}": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /** An alarm with its history */
+        get: operations["get_alarm_api_alarms__alarm_id__get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/alarms/{alarm_id}/ack": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /** Acknowledge, with a comment */
+        post: operations["ack_api_alarms__alarm_id__ack_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/alarms/{alarm_id}/shelve": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /** Shelve for some minutes (at most 8 h by default), with a reason */
+        post: operations["shelve_api_alarms__alarm_id__shelve_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/alarms/{alarm_id}/unshelve": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /** End the shelving */
+        post: operations["unshelve_api_alarms__alarm_id__unshelve_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
 }
 export type webhooks = Record<string, never>;
 export interface components {
     schemas: {
+        /** AckRequest */
+        AckRequest: {
+            /** Comment */
+            comment?: string | null;
+        };
         /** AimSettings */
         AimSettings: {
             /**
@@ -521,6 +681,318 @@ export interface components {
              * @default 5
              */
             max_correction_deg: number;
+        };
+        /**
+         * AlarmDetail
+         * @example {
+         *       "activated_at": 1795000000.1,
+         *       "frame": 1234,
+         *       "id": 7,
+         *       "name": "Gate zone",
+         *       "priority": "critical",
+         *       "rule_id": 1,
+         *       "rule_key": "rule:1",
+         *       "run_id": "20261122T220000-123.0",
+         *       "state": "unack",
+         *       "target_id": 3,
+         *       "updated_at": 1795000000.1
+         *     }
+         */
+        AlarmDetail: {
+            /** Id */
+            id: number;
+            /** Rule Id */
+            rule_id: number | null;
+            /**
+             * Rule Key
+             * @description rule:<id> for a stored rule, fault:<source> for a device fault
+             */
+            rule_key: string;
+            /** Name */
+            name: string;
+            /**
+             * Priority
+             * @enum {string}
+             */
+            priority: "critical" | "high" | "medium" | "low";
+            /**
+             * State
+             * @enum {string}
+             */
+            state: "unack" | "ack" | "rtn_unack" | "shelved" | "out_of_service" | "normal";
+            /** Activated At */
+            activated_at: number;
+            /** Cleared At */
+            cleared_at: number | null;
+            /** Acked At */
+            acked_at: number | null;
+            /** Acked By */
+            acked_by: string | null;
+            /** Updated At */
+            updated_at: number;
+            /**
+             * Frame
+             * @description the frame that triggered it
+             */
+            frame: number | null;
+            /**
+             * Target Id
+             * @description the track number (of run_id) that triggered it
+             */
+            target_id: number | null;
+            /** Run Id */
+            run_id: string | null;
+            /** Message */
+            message: string | null;
+            /** Shelved Until */
+            shelved_until: number | null;
+            /** Shelve Reason */
+            shelve_reason: string | null;
+            /** History */
+            history: components["schemas"]["AlarmEventOut"][];
+            /**
+             * Track Id
+             * @description id of the triggering track in /api/tracks, once written
+             */
+            track_id: number | null;
+            /**
+             * Playback Url
+             * @description the console's playback at the alarm, pre-roll included
+             */
+            playback_url: string;
+        };
+        /** AlarmEventOut */
+        AlarmEventOut: {
+            /** Id */
+            id: number;
+            /** At */
+            at: number;
+            /**
+             * Kind
+             * @description activated, cleared, acknowledged, shelved, unshelved, out_of_service, removed
+             */
+            kind: string;
+            /** State From */
+            state_from: string | null;
+            /** State To */
+            state_to: string | null;
+            /**
+             * Username
+             * @description who did it; null for the engine
+             */
+            username: string | null;
+            /** Comment */
+            comment: string | null;
+            /** Frame */
+            frame: number | null;
+            /** Target Id */
+            target_id: number | null;
+            /** Message */
+            message: string | null;
+        };
+        /**
+         * AlarmOut
+         * @example {
+         *       "activated_at": 1795000000.1,
+         *       "frame": 1234,
+         *       "id": 7,
+         *       "name": "Gate zone",
+         *       "priority": "critical",
+         *       "rule_id": 1,
+         *       "rule_key": "rule:1",
+         *       "run_id": "20261122T220000-123.0",
+         *       "state": "unack",
+         *       "target_id": 3,
+         *       "updated_at": 1795000000.1
+         *     }
+         */
+        AlarmOut: {
+            /** Id */
+            id: number;
+            /** Rule Id */
+            rule_id: number | null;
+            /**
+             * Rule Key
+             * @description rule:<id> for a stored rule, fault:<source> for a device fault
+             */
+            rule_key: string;
+            /** Name */
+            name: string;
+            /**
+             * Priority
+             * @enum {string}
+             */
+            priority: "critical" | "high" | "medium" | "low";
+            /**
+             * State
+             * @enum {string}
+             */
+            state: "unack" | "ack" | "rtn_unack" | "shelved" | "out_of_service" | "normal";
+            /** Activated At */
+            activated_at: number;
+            /** Cleared At */
+            cleared_at: number | null;
+            /** Acked At */
+            acked_at: number | null;
+            /** Acked By */
+            acked_by: string | null;
+            /** Updated At */
+            updated_at: number;
+            /**
+             * Frame
+             * @description the frame that triggered it
+             */
+            frame: number | null;
+            /**
+             * Target Id
+             * @description the track number (of run_id) that triggered it
+             */
+            target_id: number | null;
+            /** Run Id */
+            run_id: string | null;
+            /** Message */
+            message: string | null;
+            /** Shelved Until */
+            shelved_until: number | null;
+            /** Shelve Reason */
+            shelve_reason: string | null;
+        };
+        /**
+         * AlarmRuleIn
+         * @example {
+         *       "condition": {
+         *         "kind": "zone",
+         *         "shape": "box",
+         *         "x_max": 3,
+         *         "x_min": -3,
+         *         "z_max": 14,
+         *         "z_min": 8
+         *       },
+         *       "name": "Gate zone",
+         *       "off_delay_s": 2,
+         *       "on_delay_s": 0,
+         *       "priority": "critical"
+         *     }
+         */
+        AlarmRuleIn: {
+            /** Name */
+            name: string;
+            /**
+             * Priority
+             * @enum {string}
+             */
+            priority: "critical" | "high" | "medium" | "low";
+            /** Condition */
+            condition: components["schemas"]["ZoneCondition"] | components["schemas"]["RangeBelowCondition"] | components["schemas"]["ApproachCondition"] | components["schemas"]["SizeCondition"] | components["schemas"]["LostCondition"];
+            /**
+             * On Delay S
+             * @default 0
+             */
+            on_delay_s: number;
+            /**
+             * Off Delay S
+             * @default 0
+             */
+            off_delay_s: number;
+            /**
+             * Enabled
+             * @default true
+             */
+            enabled: boolean;
+            /**
+             * Out Of Service
+             * @default false
+             */
+            out_of_service: boolean;
+        };
+        /** AlarmRuleOut */
+        AlarmRuleOut: {
+            /** Id */
+            id: number;
+            /** Name */
+            name: string;
+            /**
+             * Priority
+             * @enum {string}
+             */
+            priority: "critical" | "high" | "medium" | "low";
+            /** Condition */
+            condition: {
+                [key: string]: unknown;
+            };
+            /** On Delay S */
+            on_delay_s: number;
+            /** Off Delay S */
+            off_delay_s: number;
+            /** Enabled */
+            enabled: boolean;
+            /** Out Of Service */
+            out_of_service: boolean;
+            /** Created At */
+            created_at: number;
+            /** Updated At */
+            updated_at: number;
+        };
+        /** AlarmRulePatch */
+        AlarmRulePatch: {
+            /** Name */
+            name?: string | null;
+            /** Priority */
+            priority?: ("critical" | "high" | "medium" | "low") | null;
+            /** Condition */
+            condition?: (components["schemas"]["ZoneCondition"] | components["schemas"]["RangeBelowCondition"] | components["schemas"]["ApproachCondition"] | components["schemas"]["SizeCondition"] | components["schemas"]["LostCondition"]) | null;
+            /** On Delay S */
+            on_delay_s?: number | null;
+            /** Off Delay S */
+            off_delay_s?: number | null;
+            /** Enabled */
+            enabled?: boolean | null;
+            /**
+             * Out Of Service
+             * @description take the rule out of service (true) or back (false)
+             */
+            out_of_service?: boolean | null;
+        };
+        /** AlarmSummary */
+        AlarmSummary: {
+            /**
+             * Open
+             * @description alarms in the list (unack, ack, rtn_unack) per priority
+             */
+            open: {
+                [key: string]: number;
+            };
+            /** Unacknowledged */
+            unacknowledged: {
+                [key: string]: number;
+            };
+            /**
+             * Flood
+             * @description more than 10 new alarms in 10 minutes (ends below 5)
+             */
+            flood: boolean;
+            /** New In Window */
+            new_in_window: number;
+            /** Window S */
+            window_s: number;
+        };
+        /**
+         * ApproachCondition
+         * @description Closing speed −dr/dt of the primary target (from the predictor) above speed_mps for for_s.
+         */
+        ApproachCondition: {
+            /**
+             * @description discriminator enum property added by openapi-typescript
+             * @enum {string}
+             */
+            kind: "approach";
+            /** Speed Mps */
+            speed_mps: number;
+            /**
+             * For S
+             * @default 0
+             */
+            for_s: number;
         };
         /** AuditOut */
         AuditOut: {
@@ -810,6 +1282,29 @@ export interface components {
              */
             csrf_token: string;
         };
+        /**
+         * LostCondition
+         * @description The primary target not seen for longer than after_s.
+         */
+        LostCondition: {
+            /**
+             * @description discriminator enum property added by openapi-typescript
+             * @enum {string}
+             */
+            kind: "lost";
+            /** After S */
+            after_s: number;
+        };
+        /** Me */
+        Me: {
+            /** Username */
+            username: string;
+            /**
+             * Role
+             * @enum {string}
+             */
+            role: "viewer" | "operator" | "admin";
+        };
         /** Message */
         Message: {
             /** Detail */
@@ -886,6 +1381,16 @@ export interface components {
              */
             tilt_deg?: number | null;
         };
+        /** RangeBelowCondition */
+        RangeBelowCondition: {
+            /**
+             * @description discriminator enum property added by openapi-typescript
+             * @enum {string}
+             */
+            kind: "range_below";
+            /** Distance M */
+            distance_m: number;
+        };
         /**
          * ServoStatus
          * @example {
@@ -946,6 +1451,41 @@ export interface components {
              * @enum {string}
              */
             type: "offer" | "answer";
+        };
+        /** ShelveRequest */
+        ShelveRequest: {
+            /**
+             * Minutes
+             * @description how long; at most the server's limit (8 h by default)
+             */
+            minutes: number;
+            /** Reason */
+            reason: string;
+        };
+        /**
+         * SizeCondition
+         * @description A target whose metric width and height (m, from its disparity) lie inside the bounds.
+         */
+        SizeCondition: {
+            /**
+             * @description discriminator enum property added by openapi-typescript
+             * @enum {string}
+             */
+            kind: "size";
+            /**
+             * Width Min
+             * @default 0
+             */
+            width_min: number;
+            /** Width Max */
+            width_max?: number | null;
+            /**
+             * Height Min
+             * @default 0
+             */
+            height_min: number;
+            /** Height Max */
+            height_max?: number | null;
         };
         /** Status */
         Status: {
@@ -1277,6 +1817,48 @@ export interface components {
             /** Ice Servers */
             ice_servers: string[];
         };
+        /**
+         * ZoneCondition
+         * @description A target inside a box (x, y, z min and max) or a vertical cylinder (centre_x, centre_z, radius,
+         *     optional y_min / y_max), in the telemetry's frame (x right, y down, z forward, m); dwell_s: how long
+         *     it must stay inside.
+         */
+        ZoneCondition: {
+            /**
+             * @description discriminator enum property added by openapi-typescript
+             * @enum {string}
+             */
+            kind: "zone";
+            /**
+             * Shape
+             * @default box
+             * @enum {string}
+             */
+            shape: "box" | "cylinder";
+            /** X Min */
+            x_min?: number | null;
+            /** X Max */
+            x_max?: number | null;
+            /** Y Min */
+            y_min?: number | null;
+            /** Y Max */
+            y_max?: number | null;
+            /** Z Min */
+            z_min?: number | null;
+            /** Z Max */
+            z_max?: number | null;
+            /** Center X */
+            center_x?: number | null;
+            /** Center Z */
+            center_z?: number | null;
+            /** Radius */
+            radius?: number | null;
+            /**
+             * Dwell S
+             * @default 0
+             */
+            dwell_s: number;
+        };
     };
     responses: never;
     parameters: never;
@@ -1412,6 +1994,26 @@ export interface operations {
                 };
                 content: {
                     "application/json": components["schemas"]["Message"];
+                };
+            };
+        };
+    };
+    me_api_auth_me_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Me"];
                 };
             };
         };
@@ -2478,6 +3080,400 @@ export interface operations {
                 };
                 content: {
                     "application/json": components["schemas"]["HTTPValidationError"];
+                };
+            };
+        };
+    };
+    list_rules_api_alarm_rules_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["AlarmRuleOut"][];
+                };
+            };
+        };
+    };
+    create_rule_api_alarm_rules_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody: {
+            content: {
+                "application/json": components["schemas"]["AlarmRuleIn"];
+            };
+        };
+        responses: {
+            /** @description Successful Response */
+            201: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["AlarmRuleOut"];
+                };
+            };
+            /** @description Unprocessable Entity */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+        };
+    };
+    delete_rule_api_alarm_rules__rule_id__delete: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                rule_id: number;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            204: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content?: never;
+            };
+            /** @description Not Found */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+            /** @description Validation Error */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["HTTPValidationError"];
+                };
+            };
+        };
+    };
+    patch_rule_api_alarm_rules__rule_id__patch: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                rule_id: number;
+            };
+            cookie?: never;
+        };
+        requestBody: {
+            content: {
+                "application/json": components["schemas"]["AlarmRulePatch"];
+            };
+        };
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["AlarmRuleOut"];
+                };
+            };
+            /** @description Not Found */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+            /** @description Conflict */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+            /** @description Unprocessable Entity */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+        };
+    };
+    list_alarms_api_alarms_get: {
+        parameters: {
+            query?: {
+                /** @description comma-separated states, or open (unack, ack, rtn_unack, shelved) */
+                state?: string | null;
+                /** @description changed at or after (Unix s) */
+                since?: number | null;
+                limit?: number;
+            };
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["AlarmOut"][];
+                };
+            };
+            /** @description Unprocessable Entity */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+        };
+    };
+    summary_api_alarms_summary_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["AlarmSummary"];
+                };
+            };
+        };
+    };
+    get_alarm_api_alarms__alarm_id__get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                alarm_id: number;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["AlarmDetail"];
+                };
+            };
+            /** @description Not Found */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+            /** @description Validation Error */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["HTTPValidationError"];
+                };
+            };
+        };
+    };
+    ack_api_alarms__alarm_id__ack_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                alarm_id: number;
+            };
+            cookie?: never;
+        };
+        requestBody: {
+            content: {
+                "application/json": components["schemas"]["AckRequest"];
+            };
+        };
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["AlarmOut"];
+                };
+            };
+            /** @description Not Found */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+            /** @description Conflict */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+            /** @description Unprocessable Entity */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+        };
+    };
+    shelve_api_alarms__alarm_id__shelve_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                alarm_id: number;
+            };
+            cookie?: never;
+        };
+        requestBody: {
+            content: {
+                "application/json": components["schemas"]["ShelveRequest"];
+            };
+        };
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["AlarmOut"];
+                };
+            };
+            /** @description Not Found */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+            /** @description Conflict */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+            /** @description Unprocessable Entity */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+        };
+    };
+    unshelve_api_alarms__alarm_id__unshelve_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                alarm_id: number;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["AlarmOut"];
+                };
+            };
+            /** @description Not Found */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+            /** @description Conflict */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+            /** @description Unprocessable Entity */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
                 };
             };
         };

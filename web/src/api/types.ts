@@ -26,6 +26,14 @@ export type UserIn = S["UserIn"];
 export type UserPatch = S["UserPatch"];
 export type AuditOut = S["AuditOut"];
 export type Health = S["Health"];
+export type AlarmOut = S["AlarmOut"];
+export type AlarmDetail = S["AlarmDetail"];
+export type AlarmEvent = S["AlarmEventOut"];
+export type AlarmRuleOut = S["AlarmRuleOut"];
+export type AlarmRuleIn = S["AlarmRuleIn"];
+export type AlarmRulePatch = S["AlarmRulePatch"];
+export type AlarmSummary = S["AlarmSummary"];
+export type Priority = AlarmOut["priority"];
 
 /** `/ws/events` messages. */
 export interface ServerEvent {

@@ -10,6 +10,7 @@ import { JogController, type Vec } from "../lib/jog";
 import { MetricView, type Wedge, type XY } from "../lib/plots";
 import { atLeast, roleReason } from "../lib/session";
 import { ReconnectingSocket, type SocketState } from "../lib/socket";
+import { zoneOutlines } from "../lib/zones";
 import { motionOf, TelemetryBuffer, type Match } from "../lib/telemetry";
 import { detectionAt, drawOverlay } from "../video/overlay";
 import { mjpegAvailable, startWebRtc, VideoUnavailable, type RtcVideo } from "../video/webrtc";
@@ -159,11 +160,16 @@ export function livePage(ctx: PageContext): Page {
     h("section", { class: "panel plot", "aria-label": "Side view of the last minute (metres)" }, sideEl));
   const plan = new MetricView(planEl, { title: "Plan view (last minute)", xLabel: "x (m, right)",
     yLabel: "z (m, ahead)", minSpan: 6, include: [[0, 0], [0, 6]],
-    series: [{ label: "primary", stroke: "#ffb020" }, { label: "other targets", stroke: "#4fd1ff", width: 1.5 }] });
+    series: [{ label: "primary", stroke: "#ffb020" }, { label: "other targets", stroke: "#4fd1ff", width: 1.5 },
+      { label: "alarm zones", stroke: "#ff6b6b", width: 1.5 }] });
+  let zones: XY = [[], []];
+  const loadZones = () => api.alarmRules().then((r) => { zones = zoneOutlines(r); }, () => undefined);
+  void loadZones();
+  const zoneTimer = window.setInterval(() => void loadZones(), 5000);
   const side = new MetricView(sideEl, { title: "Side view (last minute)", xLabel: "ground range (m)",
     yLabel: "height (m, up)", minSpan: 3, include: [[0, 0], [6, 0]],
     series: [{ label: "primary", stroke: "#ffb020" }, { label: "other targets", stroke: "#4fd1ff", width: 1.5 }] });
-  cleanups.push(() => plan.destroy(), () => side.destroy());
+  cleanups.push(() => plan.destroy(), () => side.destroy(), () => window.clearInterval(zoneTimer));
   const history = new Map<number, { t: number; x: number; y: number; z: number }[]>();
   let primaryId: number | null = null;
 
@@ -724,7 +730,7 @@ export function livePage(ctx: PageContext): Page {
     const planWedge: Wedge = { centreDeg: pan, halfDeg: hHalf, label: `FOV ${num(2 * hHalf, 0)}°, pan ${num(pan, 1)}°` };
     const sideWedge: Wedge = { centreDeg: tilt, halfDeg: vHalf, fromHorizontal: true,
       label: `FOV ${num(2 * vHalf, 0)}°, tilt ${num(tilt, 1)}°` };
-    plan.setData([prim, others], [planWedge], headsPlan);
+    plan.setData([prim, others, zones], [planWedge], headsPlan);
     side.setData([sPrim, sOthers], [sideWedge], headsSide);
   }, 250);
   cleanups.push(() => window.clearInterval(plotTimer));
