@@ -9,8 +9,9 @@ import contextlib
 import gc
 import logging
 import os
-from collections.abc import AsyncIterator
+from collections.abc import AsyncIterator, Coroutine
 from pathlib import Path
+from typing import Any
 
 from fastapi import FastAPI
 from fastapi.staticfiles import StaticFiles
@@ -116,6 +117,52 @@ def _prepare_db(settings: Settings) -> tuple[AppContext, TrackerTuning, object]:
     return ctx, tuning, rig
 
 
+async def _task(stack: contextlib.AsyncExitStack, coro: Coroutine[Any, Any, None], name: str,
+                drain_s: float | None = None) -> None:
+    """Run a background task until the app stops: cancelled then, or given drain_s seconds to end by itself
+    (a consumer of the runtime's frames ends once the runtime has stopped and its hub is closed)."""
+    task = asyncio.create_task(coro, name=name)
+
+    async def finish() -> None:
+        if drain_s is None:
+            task.cancel()
+        with contextlib.suppress(Exception, asyncio.CancelledError):
+            await asyncio.wait_for(task, drain_s or 1.0)
+    stack.push_async_callback(finish)
+
+
+async def _start_services(stack: contextlib.AsyncExitStack, ctx: AppContext, rt: Runtime, settings: Settings) -> None:
+    """Everything that consumes the runtime's frames, each stopped by the stack in reverse order."""
+    s = settings
+    ctx.events = EventBus(asyncio.get_running_loop())
+    ctx.calibrations = CalibrationJobs(ctx.sessions, s.data_dir, ctx.events)
+    stack.push_async_callback(ctx.calibrations.close)
+    ctx.exports = ExportJobs(ctx.sessions, s.data_dir)
+    stack.push_async_callback(asyncio.to_thread, ctx.exports.close)
+    ctx.media = MediaPipeline(rt, MediaConfig(s.video_bitrate, s.video_gop, s.stamp_frames, s.mjpeg_fps,
+                                              s.mjpeg_quality))
+    ctx.media.start()
+    stack.push_async_callback(asyncio.to_thread, ctx.media.stop)
+    ctx.viewers = Viewers(ctx.media, s.ice_servers)
+    stack.push_async_callback(ctx.viewers.close)
+    recorder = ctx.recorder = Recorder(ctx.media, rt, ctx.sessions, s.data_dir, recorder_config(s))
+    recorder.start()
+    stack.push_async_callback(asyncio.to_thread, recorder.stop)
+    ctx.frames = FrameCache(s.data_dir)
+    retention = RetentionTask(ctx.sessions, s.data_dir, retention_policy(s), s.retention_interval_s)
+    await _task(stack, retention.run(), "retention")
+    writer = TrackWriter(rt, ctx.sessions, s.track_sample_hz, s.track_flush_s)
+    await _task(stack, writer.run(), "track-writer", drain_s=3.0)
+    ctx.extras["track_writer"] = writer
+    await _task(stack, ctx.monitor.run(), "loop-monitor")
+    ctx.alarms = AlarmService(rt, ctx.sessions, ctx.events, s.data_dir, alarm_options(s),
+                              run_id=lambda: f"{writer.run_id}.{rt.generation}")
+    ctx.alarms.probes["database"] = counter_probe(lambda: writer.errors, "writing tracks failed")
+    ctx.alarms.probes["recording"] = lambda: recorder.fault
+    await asyncio.to_thread(ctx.alarms.start)
+    stack.push_async_callback(asyncio.to_thread, ctx.alarms.stop)
+
+
 def create_app(settings: Settings, runtime: Runtime | None = None) -> FastAPI:
     """The application for `settings`; `runtime` overrides the one built from them (tests)."""
 
@@ -123,33 +170,17 @@ def create_app(settings: Settings, runtime: Runtime | None = None) -> FastAPI:
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         ctx, tuning, rig = await asyncio.to_thread(_prepare_db, settings)
         rt = runtime or Runtime(runtime_config(settings), tuning)
-        try:
+        async with contextlib.AsyncExitStack() as stack:
+            stack.callback(ctx.engine.dispose)
+            stack.callback(log.info, "stopped")
             await asyncio.to_thread(rt.start, rig)  # type: ignore[arg-type]
             ctx.runtime = rt
-            ctx.events = EventBus(asyncio.get_running_loop())
-            ctx.calibrations = CalibrationJobs(ctx.sessions, settings.data_dir, ctx.events)
-            ctx.media = MediaPipeline(rt, MediaConfig(settings.video_bitrate, settings.video_gop, settings.stamp_frames,
-                                                      settings.mjpeg_fps, settings.mjpeg_quality))
-            ctx.media.start()
-            ctx.viewers = Viewers(ctx.media, settings.ice_servers)
-            ctx.recorder = Recorder(ctx.media, rt, ctx.sessions, settings.data_dir, recorder_config(settings))
-            ctx.recorder.start()
-            ctx.frames = FrameCache(settings.data_dir)
-            ctx.exports = ExportJobs(ctx.sessions, settings.data_dir)
-            retention = RetentionTask(ctx.sessions, settings.data_dir, retention_policy(settings),
-                                      settings.retention_interval_s)
-            retention_task = asyncio.create_task(retention.run(), name="retention")
-            ctx.extras["retention"] = retention
-            writer = TrackWriter(rt, ctx.sessions, settings.track_sample_hz, settings.track_flush_s)
-            writer_task = asyncio.create_task(writer.run(), name="track-writer")
-            monitor_task = asyncio.create_task(ctx.monitor.run(), name="loop-monitor")
-            ctx.extras["track_writer"] = writer
-            ctx.alarms = AlarmService(rt, ctx.sessions, ctx.events, settings.data_dir, alarm_options(settings),
-                                      run_id=lambda: f"{writer.run_id}.{rt.generation}")
-            ctx.alarms.probes["database"] = counter_probe(lambda: writer.errors, "writing tracks failed")
-            recorder = ctx.recorder
-            ctx.alarms.probes["recording"] = lambda: recorder.fault
-            await asyncio.to_thread(ctx.alarms.start)
+            stack.push_async_callback(asyncio.to_thread, rt.stop)  # runs last of all that follow
+            await _start_services(stack, ctx, rt, settings)
+            # the tracker stops first: every consumer then drains what its queue holds and ends
+            stack.push_async_callback(asyncio.to_thread, rt.stop)
+            stack.callback(ctx.stopping.set)
+            stack.callback(log.info, "stopping")
             app.state.ctx = ctx
             log.info("tracker running: %s", rt.status()["source"])
             # the start-up objects (188,000: modules, the app, the runtime) leave the collector: a full collection
@@ -157,31 +188,6 @@ def create_app(settings: Settings, runtime: Runtime | None = None) -> FastAPI:
             gc.collect()
             gc.freeze()
             yield
-        finally:
-            log.info("stopping")
-            ctx.stopping.set()
-            if ctx.alarms is not None:
-                await asyncio.to_thread(ctx.alarms.stop)
-            if ctx.viewers is not None:
-                await ctx.viewers.close()
-            if "track_writer" in ctx.extras:
-                monitor_task.cancel()
-            if "retention" in ctx.extras:
-                retention_task.cancel()
-            await asyncio.to_thread(rt.stop)
-            if ctx.recorder is not None:
-                await asyncio.to_thread(ctx.recorder.stop)
-            if ctx.media is not None:
-                await asyncio.to_thread(ctx.media.stop)
-            if "track_writer" in ctx.extras:
-                with contextlib.suppress(Exception):
-                    await asyncio.wait_for(writer_task, 3.0)
-            if ctx.calibrations is not None:
-                await ctx.calibrations.close()
-            if ctx.exports is not None:
-                await asyncio.to_thread(ctx.exports.close)
-            ctx.engine.dispose()
-            log.info("stopped")
 
     app = FastAPI(title="TMEye", version=__version__, lifespan=lifespan, openapi_url="/api/openapi.json",
                   docs_url="/api/docs", redoc_url=None,

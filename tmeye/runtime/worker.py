@@ -103,6 +103,7 @@ class Runtime:
         self.generation = 0
         self.source_fault: str | None = None
         self.stalls = StallLog()
+        self._closing = False
 
     # --- life cycle ----------------------------------------------------------------------------------
     def start(self, rig: StereoRig | None = None) -> None:
@@ -119,11 +120,13 @@ class Runtime:
         self._thread.start()
 
     def stop(self, timeout: float = 3.0) -> None:
+        """End the worker, then close the source and the servo (once, however often it is called)."""
         self._stop.set()
         if self._thread is not None:
             self._thread.join(timeout)
-        if self.comp is not None:
-            self.comp.close()
+        comp, self._closing = (None if self._closing else self.comp), True
+        if comp is not None:
+            comp.close()
         self.hub.close()
         if self.state == "running":
             self.state = "stopped"
