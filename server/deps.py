@@ -8,7 +8,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Annotated
 
-from fastapi import Depends, HTTPException, Request, WebSocket, status
+from fastapi import Depends, HTTPException, Path, Request, WebSocket, status
 from sqlalchemy.orm import Session
 
 from server.context import AppContext
@@ -20,6 +20,10 @@ COOKIE = "tmeye_session"
 CSRF_COOKIE = "tmeye_csrf"
 CSRF_HEADER = "X-CSRF-Token"
 SAFE_METHODS = frozenset({"GET", "HEAD", "OPTIONS"})
+SQLITE_MAX_INT = 2**63 - 1
+
+# A row id in a path: SQLite's INTEGER range (a larger number would fail in the driver, not be "not found").
+RowId = Annotated[int, Path(ge=1, le=SQLITE_MAX_INT, description="row id")]
 
 
 def get_ctx(request: Request) -> AppContext:
