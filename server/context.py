@@ -10,7 +10,7 @@ from sqlalchemy import Engine
 from sqlalchemy.orm import Session, sessionmaker
 
 from server.media.webrtc import Viewers
-from server.security import LoginThrottle
+from server.security import IdleTimer, LoginThrottle
 from server.services.monitor import Monitor
 from server.settings import Settings
 from tmeye.media.pipeline import MediaPipeline
@@ -36,3 +36,4 @@ class AppContext:
     viewers: Viewers
     stopping: asyncio.Event
     extras: dict[str, object] = field(default_factory=dict)
+    idle: IdleTimer = field(default_factory=lambda: IdleTimer(30 * 60))
