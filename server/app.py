@@ -19,6 +19,7 @@ from fastapi.staticfiles import StaticFiles
 from server.alarms.faults import FaultThresholds
 from server.context import AppContext
 from server.db.engine import make_engine, session_factory, upgrade
+from server.headers import SecurityHeaders
 from server.media.webrtc import Viewers
 from server.routes import (
     alarms,
@@ -36,7 +37,7 @@ from server.routes import (
     tracks,
     users,
 )
-from server.security import LoginThrottle, new_secret
+from server.security import IdleTimer, LoginThrottle, new_secret
 from server.services import calibration as cal_service
 from server.services import control, segments
 from server.services import exports as export_service
@@ -113,7 +114,7 @@ def _prepare_db(settings: Settings) -> tuple[AppContext, TrackerTuning, object]:
     tuning = TrackerTuning().updated(saved) if saved else TrackerTuning()
     throttle = LoginThrottle(settings.login_user_failures, settings.login_address_failures, settings.login_window_s)
     ctx = AppContext(settings, engine, sessions, key, throttle, None, None, None, Monitor(),  # type: ignore[arg-type]
-                     None, None, asyncio.Event())  # type: ignore[arg-type]
+                     None, None, asyncio.Event(), idle=IdleTimer(settings.session_idle_s))  # type: ignore[arg-type]
     return ctx, tuning, rig
 
 
@@ -194,6 +195,7 @@ def create_app(settings: Settings, runtime: Runtime | None = None) -> FastAPI:
                   description="Stereo tracker console API: status, telemetry, servo control, tracks, calibration, "
                               "users. Log in at /api/auth/login; send the token as `Authorization: Bearer`.")
     errors.install(app)
+    app.add_middleware(SecurityHeaders)
     for r in (health, auth, servo, tracks, tracker, calibration, users, live, telemetry_ws, recordings, evidence,
               exports, alarms):
         app.include_router(r.router)

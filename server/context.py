@@ -10,7 +10,7 @@ from sqlalchemy import Engine
 from sqlalchemy.orm import Session, sessionmaker
 
 from server.media.webrtc import Viewers
-from server.security import LoginThrottle
+from server.security import IdleTimer, LoginThrottle
 from server.services.monitor import Monitor
 from server.settings import Settings
 from tmeye.media.pipeline import MediaPipeline
@@ -44,3 +44,4 @@ class AppContext:
     frames: FrameCache | None = None
     exports: ExportJobs | None = None
     alarms: AlarmService = None  # type: ignore[assignment]  # set by the lifespan
+    idle: IdleTimer = field(default_factory=lambda: IdleTimer(30 * 60))

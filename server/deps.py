@@ -7,8 +7,9 @@ import hmac
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Annotated
+from urllib.parse import urlsplit
 
-from fastapi import Depends, HTTPException, Request, WebSocket, status
+from fastapi import Depends, HTTPException, Path, Request, WebSocket, status
 from sqlalchemy.orm import Session
 
 from server.context import AppContext
@@ -20,6 +21,10 @@ COOKIE = "tmeye_session"
 CSRF_COOKIE = "tmeye_csrf"
 CSRF_HEADER = "X-CSRF-Token"
 SAFE_METHODS = frozenset({"GET", "HEAD", "OPTIONS"})
+SQLITE_MAX_INT = 2**63 - 1
+
+# A row id in a path: SQLite's INTEGER range (a larger number would fail in the driver, not be "not found").
+RowId = Annotated[int, Path(ge=1, le=SQLITE_MAX_INT, description="row id")]
 
 
 def get_ctx(request: Request) -> AppContext:
@@ -71,6 +76,10 @@ def authenticate(ctx: AppContext, db: Session, token: str | None, via_cookie: bo
     user = user_service.session_user(db, claims.session_id)
     if user is None:
         raise _unauthorized("session ended (logged out, expired or password changed)")
+    if not ctx.idle.touch(claims.session_id):
+        user_service.revoke(db, claims.session_id)
+        db.commit()
+        raise _unauthorized(f"session ended after {ctx.settings.session_idle_s} s without a request")
     return Principal(user, claims.session_id, via_cookie)
 
 
@@ -110,9 +119,19 @@ def client_address(request: Request) -> str:
 Address = Annotated[str, Depends(client_address)]
 
 
+def same_origin(origin: str, host: str) -> bool:
+    """Whether a browser's Origin header names the host the request was sent to."""
+    return urlsplit(origin).netloc.lower() == host.lower()
+
+
 def websocket_principal(ws: WebSocket, ctx: AppContext, role: str = "viewer") -> Principal:
-    """Authenticate a WebSocket handshake (cookie or Authorization: Bearer); HTTPException otherwise."""
+    """Authenticate a WebSocket handshake (cookie or Authorization: Bearer); HTTPException otherwise.
+    A cookie-authenticated handshake must come from the console's own origin (browsers send the cookie
+    with a handshake that another site's page starts: cross-site WebSocket hijacking)."""
     token, via_cookie = token_from(dict(ws.headers), dict(ws.cookies))
+    origin = ws.headers.get("origin")
+    if via_cookie and token and origin and not same_origin(origin, ws.headers.get("host", "")):
+        raise HTTPException(status.HTTP_403_FORBIDDEN, f"cross-origin WebSocket from {origin[:60]} refused")
     with ctx.sessions() as db:
         p = authenticate(ctx, db, token, via_cookie)
     if user_service.RANK.get(p.user.role, -1) < user_service.RANK[role]:

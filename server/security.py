@@ -6,6 +6,8 @@
   while its signature holds, it has not expired and its session row is not revoked (checked by the caller).
 - CSRF: a cookie-authenticated unsafe request must carry `X-CSRF-Token` equal to HMAC(key, "csrf" + session).
 - Throttling: a sliding window of failed logins per username and per address.
+- Idle expiry: a session with no request for `session_idle_s` ends (ASVS 7.3.1); the absolute lifetime is
+  the token's expiry (ASVS 7.3.2).
 """
 
 from __future__ import annotations
@@ -124,3 +126,29 @@ class LoginThrottle:
 
     def succeeded(self, username: str) -> None:
         self._fails.pop(("user", username.lower()), None)
+
+
+class IdleTimer:
+    """The time of each session's last request, in memory: `touch` answers False (and forgets the session)
+    when more than `idle_s` passed since the previous one; a session not seen yet (a new login, or any
+    session after a restart) starts its timer now."""
+
+    def __init__(self, idle_s: float, clock: Callable[[], float] = time.monotonic):
+        self.idle_s, self.clock = idle_s, clock
+        self._seen: dict[str, float] = {}
+
+    def touch(self, session_id: str) -> bool:
+        now = self.clock()
+        last = self._seen.get(session_id)
+        if last is not None and now - last > self.idle_s:
+            del self._seen[session_id]
+            return False
+        self._seen[session_id] = now
+        if len(self._seen) > 10_000:  # forget the longest idle (they have expired anyway)
+            for sid, t in sorted(self._seen.items(), key=lambda kv: kv[1])[:1000]:
+                if now - t > self.idle_s:
+                    del self._seen[sid]
+        return True
+
+    def forget(self, session_id: str) -> None:
+        self._seen.pop(session_id, None)

@@ -3,10 +3,11 @@
 
 from __future__ import annotations
 
+import ipaddress
 from pathlib import Path
 from typing import Any
 
-from pydantic import Field, field_validator
+from pydantic import Field, field_validator, model_validator
 from pydantic_settings import BaseSettings, PydanticBaseSettingsSource, SettingsConfigDict, TomlConfigSettingsSource
 
 DEFAULT_DATA_DIR = "./tmeye-data"
@@ -30,8 +31,18 @@ class Settings(BaseSettings):
                                                 "(maestro:/dev/ttyACM0, ascii:/dev/ttyUSB0); default: sim with "
                                                 "the simulated source, none with a real one")
     realtime: bool = Field(True, description="pace the tracker at the source's frame rate")
-    token_ttl_s: int = Field(12 * 3600, ge=60, le=30 * 86400, description="session lifetime (s)")
-    cookie_secure: bool = Field(False, description="mark the session cookie Secure (set when behind HTTPS)")
+    token_ttl_s: int = Field(12 * 3600, ge=5, le=30 * 86400, description="absolute session lifetime (s): a login "
+                                                                       "ends this long after it was made")
+    session_idle_s: int = Field(30 * 60, ge=2, le=30 * 86400, description="idle session timeout (s): a session "
+                                "with no request for this long ends (the timer is kept in memory: a restart "
+                                "counts as activity)")
+    cookie_secure: bool = Field(False, description="always mark the session cookies Secure (they are anyway when "
+                                                   "the request came over HTTPS, directly or via a trusted proxy)")
+    tls_cert: Path | None = Field(None, description="PEM certificate (chain) to serve HTTPS directly")
+    tls_key: Path | None = Field(None, description="PEM private key of tls_cert")
+    trusted_proxies: list[str] = Field(default_factory=list, description="addresses or CIDR networks of reverse "
+                                       "proxies whose X-Forwarded-For and X-Forwarded-Proto are believed (none by "
+                                       "default: the peer address is the client)")
     login_user_failures: int = Field(5, ge=1, description="failed logins per username per window before 429")
     login_address_failures: int = Field(20, ge=1, description="failed logins per address per window before 429")
     login_window_s: int = Field(600, ge=1, description="login throttling window (s)")
@@ -85,6 +96,22 @@ class Settings(BaseSettings):
         if v not in ("continuous", "events", "off"):
             raise ValueError(f"unknown recording mode {v!r}; use continuous, events or off")
         return v
+
+    @field_validator("trusted_proxies")
+    @classmethod
+    def _proxies(cls, v: list[str]) -> list[str]:
+        for item in v:
+            try:
+                ipaddress.ip_network(item, strict=False)
+            except ValueError:
+                raise ValueError(f"trusted proxy {item!r} is not an IP address or network") from None
+        return v
+
+    @model_validator(mode="after")
+    def _tls_pair(self) -> Settings:
+        if (self.tls_cert is None) != (self.tls_key is None):
+            raise ValueError("tls_cert and tls_key go together: give both or neither")
+        return self
 
     @field_validator("log_level")
     @classmethod

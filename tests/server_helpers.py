@@ -69,7 +69,7 @@ def start_server(data_dir: Path, *args: str, env: dict[str, str] | None = None, 
                             env={**os.environ, **(env or {})})
     assert proc.stdout is not None
     line = proc.stdout.readline()
-    m = re.search(r"(http://127\.0\.0\.1:\d+)/", line)
+    m = re.search(r"(https?://127\.0\.0\.1:\d+)/", line)
     if not m:
         proc.kill()
         raise AssertionError(f"no URL printed: {line!r}\n{log.read_text()}")
@@ -79,7 +79,7 @@ def start_server(data_dir: Path, *args: str, env: dict[str, str] | None = None, 
         if proc.poll() is not None:
             raise AssertionError(f"server exited with {proc.returncode}:\n{server.log_text()}")
         try:
-            if httpx.get(f"{server.url}/api/health", timeout=2).json().get("status") == "ok":
+            if httpx.get(f"{server.url}/api/health", timeout=2, verify=False).json().get("status") == "ok":
                 return server
         except httpx.HTTPError:
             pass

@@ -16,7 +16,7 @@ from server.alarm_schemas import (
     AlarmSummary,
     ShelveRequest,
 )
-from server.deps import Address, Admin, CtxDep, DbDep, Operator, Viewer
+from server.deps import Address, Admin, CtxDep, DbDep, Operator, RowId, Viewer
 from server.schemas import Message
 from server.services import alarm_store as store
 from server.services.errors import Invalid
@@ -39,12 +39,12 @@ def create_rule(body: AlarmRuleIn, ctx: CtxDep, p: Admin, db: DbDep, addr: Addre
 
 @router.patch("/alarm-rules/{rule_id}", response_model=AlarmRuleOut, responses=EACT,
               summary="Change a rule; out_of_service takes it out of service or back")
-def patch_rule(rule_id: int, body: AlarmRulePatch, ctx: CtxDep, p: Admin, db: DbDep, addr: Address) -> dict[str, Any]:
+def patch_rule(rule_id: RowId, body: AlarmRulePatch, ctx: CtxDep, p: Admin, db: DbDep, addr: Address) -> dict[str, Any]:
     return ctx.alarms.update_rule(db, p.user, addr, rule_id, body.model_dump(exclude_none=True))
 
 
 @router.delete("/alarm-rules/{rule_id}", status_code=204, responses=E404, summary="Delete a rule")
-def delete_rule(rule_id: int, ctx: CtxDep, p: Admin, db: DbDep, addr: Address) -> None:
+def delete_rule(rule_id: RowId, ctx: CtxDep, p: Admin, db: DbDep, addr: Address) -> None:
     ctx.alarms.delete_rule(db, p.user, addr, rule_id)
 
 
@@ -65,23 +65,23 @@ def summary(ctx: CtxDep, _p: Viewer) -> dict[str, Any]:
 
 
 @router.get("/alarms/{alarm_id}", response_model=AlarmDetail, responses=E404, summary="An alarm with its history")
-def get_alarm(alarm_id: int, ctx: CtxDep, _p: Viewer, db: DbDep) -> dict[str, Any]:
+def get_alarm(alarm_id: RowId, ctx: CtxDep, _p: Viewer, db: DbDep) -> dict[str, Any]:
     return store.detail(db, alarm_id, ctx.settings.alarm_preroll_s)
 
 
 @router.post("/alarms/{alarm_id}/ack", response_model=AlarmOut, responses=EACT, summary="Acknowledge, with a comment")
-def ack(alarm_id: int, body: AckRequest, ctx: CtxDep, p: Operator, db: DbDep, addr: Address) -> dict[str, Any]:
+def ack(alarm_id: RowId, body: AckRequest, ctx: CtxDep, p: Operator, db: DbDep, addr: Address) -> dict[str, Any]:
     return ctx.alarms.ack(db, p.user, addr, alarm_id, body.comment)
 
 
 @router.post("/alarms/{alarm_id}/shelve", response_model=AlarmOut, responses=EACT,
              summary="Shelve for some minutes (at most 8 h by default), with a reason")
-def shelve(alarm_id: int, body: ShelveRequest, ctx: CtxDep, p: Operator, db: DbDep, addr: Address) -> dict[str, Any]:
+def shelve(alarm_id: RowId, body: ShelveRequest, ctx: CtxDep, p: Operator, db: DbDep, addr: Address) -> dict[str, Any]:
     if body.minutes * 60.0 > ctx.settings.alarm_max_shelve_h * 3600.0:
         raise Invalid(f"minutes: at most {ctx.settings.alarm_max_shelve_h * 60:g} (the longest shelving)")
     return ctx.alarms.shelve(db, p.user, addr, alarm_id, body.minutes, body.reason)
 
 
 @router.post("/alarms/{alarm_id}/unshelve", response_model=AlarmOut, responses=EACT, summary="End the shelving")
-def unshelve(alarm_id: int, ctx: CtxDep, p: Operator, db: DbDep, addr: Address) -> dict[str, Any]:
+def unshelve(alarm_id: RowId, ctx: CtxDep, p: Operator, db: DbDep, addr: Address) -> dict[str, Any]:
     return ctx.alarms.unshelve(db, p.user, addr, alarm_id)

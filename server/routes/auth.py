@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from fastapi import APIRouter, Depends, HTTPException, Response
+from fastapi import APIRouter, Depends, HTTPException, Request, Response
 from fastapi.security import OAuth2PasswordRequestForm
 
 from server.deps import COOKIE, CSRF_COOKIE, Address, CtxDep, DbDep, PrincipalDep
@@ -16,8 +16,8 @@ router = APIRouter(prefix="/api/auth", tags=["auth"])
 
 @router.post("/login", response_model=LoginAnswer, summary="Log in with username and password",
              responses={401: {"model": Message}, 429: {"model": Message, "description": "too many failures"}})
-def login(form: Annotated[OAuth2PasswordRequestForm, Depends()], response: Response, ctx: CtxDep, db: DbDep,
-          address: Address) -> LoginAnswer:
+def login(form: Annotated[OAuth2PasswordRequestForm, Depends()], request: Request, response: Response, ctx: CtxDep,
+          db: DbDep, address: Address) -> LoginAnswer:
     wait = ctx.throttle.retry_after(form.username, address)
     if wait:
         raise HTTPException(429, f"too many failed logins: try again in {wait} s", headers={"Retry-After": str(wait)})
@@ -26,7 +26,7 @@ def login(form: Annotated[OAuth2PasswordRequestForm, Depends()], response: Respo
         ctx.throttle.failed(form.username, address)
         raise HTTPException(401, "wrong username or password", headers={"WWW-Authenticate": "Bearer"})
     ctx.throttle.succeeded(form.username)
-    secure = ctx.settings.cookie_secure
+    secure = ctx.settings.cookie_secure or request.url.scheme == "https"  # https: directly or via a trusted proxy
     response.set_cookie(COOKIE, answer.access_token, max_age=answer.expires_in, httponly=True, samesite="strict",
                         secure=secure, path="/")
     response.set_cookie(CSRF_COOKIE, answer.csrf_token, max_age=answer.expires_in, httponly=False,
@@ -40,8 +40,9 @@ def me(p: PrincipalDep) -> Me:
 
 
 @router.post("/logout", status_code=204, summary="End this session: its token stops working at once")
-def logout(p: PrincipalDep, response: Response, db: DbDep, address: Address) -> Response:
+def logout(p: PrincipalDep, response: Response, ctx: CtxDep, db: DbDep, address: Address) -> Response:
     auth_service.logout(db, p.user, p.session_id, address)
+    ctx.idle.forget(p.session_id)
     response.status_code = 204
     response.delete_cookie(COOKIE, path="/")
     response.delete_cookie(CSRF_COOKIE, path="/")

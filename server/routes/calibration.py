@@ -8,7 +8,7 @@ from typing import Annotated, Any
 from fastapi import APIRouter, File, Form, UploadFile
 from fastapi.responses import JSONResponse
 
-from server.deps import Address, Admin, CtxDep, DbDep, Viewer
+from server.deps import Address, Admin, CtxDep, DbDep, RowId, Viewer
 from server.schemas import CalibrationOut, Message
 from server.services import calibration as cal
 
@@ -35,13 +35,13 @@ def list_records(_p: Viewer, db: DbDep) -> list[dict[str, Any]]:
 
 
 @router.get("/{rec_id}", response_model=CalibrationOut, responses=NOT_FOUND, summary="One record with its report")
-def get_record(rec_id: int, _p: Viewer, db: DbDep) -> dict[str, Any]:
+def get_record(rec_id: RowId, _p: Viewer, db: DbDep) -> dict[str, Any]:
     return cal.as_json(cal.get(db, rec_id), report=True)
 
 
 @router.post("/{rec_id}/activate", response_model=CalibrationOut, responses={**NOT_FOUND, 409: {"model": Message}},
              summary="Make this rig the tracker's (switches without a restart)")
-def activate(rec_id: int, ctx: CtxDep, p: Admin, db: DbDep, addr: Address) -> dict[str, Any]:
+def activate(rec_id: RowId, ctx: CtxDep, p: Admin, db: DbDep, addr: Address) -> dict[str, Any]:
     rec = cal.get(db, rec_id)
     cal.activate(db, ctx.runtime, rec, p.user, addr)
     return cal.as_json(rec)
@@ -49,7 +49,7 @@ def activate(rec_id: int, ctx: CtxDep, p: Admin, db: DbDep, addr: Address) -> di
 
 @router.get("/{rec_id}/rig", responses={**NOT_FOUND, 409: {"model": Message}},
             summary="The rig file (JSON) this calibration produced")
-def download_rig(rec_id: int, _p: Viewer, db: DbDep) -> JSONResponse:
+def download_rig(rec_id: RowId, _p: Viewer, db: DbDep) -> JSONResponse:
     rec = cal.get(db, rec_id)
     if rec.rig is None:
         return JSONResponse({"detail": f"calibration {rec_id} is {rec.status}: it has no rig file"}, 409)

@@ -1,6 +1,10 @@
-"""Service errors as HTTP answers: NotFound 404, Conflict 409, Invalid 422, Unavailable 503."""
+"""Service errors as HTTP answers: NotFound 404, Conflict 409, Invalid 422, Unavailable 503; request
+validation errors as a one-line 400/422; and the OpenAPI document saying so (FastAPI's default 422 schema,
+a list of error objects, is replaced by the `{"detail": "one line"}` the server really sends)."""
 
 from __future__ import annotations
+
+from typing import Any
 
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
@@ -26,7 +30,35 @@ def describe(exc: RequestValidationError) -> tuple[int, str]:
     return status, "; ".join(parts) or "invalid request"
 
 
+ONE_LINE_ERROR = {"title": "HTTPValidationError", "type": "object", "required": ["detail"],
+                  "properties": {"detail": {"type": "string", "title": "Detail",
+                                            "description": "what is wrong, in one line"}}}
+
+
+def _one_line_openapi(app: FastAPI) -> None:
+    build = app.openapi
+
+    def openapi() -> dict[str, Any]:
+        if app.openapi_schema is None:
+            doc = build()
+            schemas = doc.get("components", {}).get("schemas", {})
+            if "HTTPValidationError" in schemas:
+                schemas["HTTPValidationError"] = ONE_LINE_ERROR
+                schemas.pop("ValidationError", None)
+            for ops in doc.get("paths", {}).values():
+                for op in ops.values():
+                    if "requestBody" in op:  # a body that is not JSON (or not a form) is a 400
+                        op.setdefault("responses", {}).setdefault("400", {
+                            "description": "the request body cannot be parsed",
+                            "content": {"application/json": {"schema": {"$ref": "#/components/schemas/"
+                                                                                "HTTPValidationError"}}}})
+            app.openapi_schema = doc
+        return app.openapi_schema
+    app.openapi = openapi  # type: ignore[method-assign]
+
+
 def install(app: FastAPI) -> None:
+    _one_line_openapi(app)
     async def invalid(_req: Request, exc: Exception) -> JSONResponse:
         assert isinstance(exc, RequestValidationError)
         status, msg = describe(exc)

@@ -6,7 +6,7 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, Query
 
-from server.deps import Address, Admin, CtxDep, DbDep, Operator, Viewer
+from server.deps import Address, Admin, CtxDep, DbDep, Operator, RowId, Viewer
 from server.recording_schemas import BookmarkIn, BookmarkOut, LockIn, LockOut
 from server.schemas import Message
 from server.services import evidence
@@ -29,7 +29,7 @@ def add_lock(body: LockIn, ctx: CtxDep, p: Operator, db: DbDep, addr: Address) -
 
 
 @router.delete("/locks/{lock_id}", status_code=204, responses=NOT_FOUND, summary="Unlock (admin)")
-def remove_lock(lock_id: int, p: Admin, db: DbDep, addr: Address) -> None:
+def remove_lock(lock_id: RowId, p: Admin, db: DbDep, addr: Address) -> None:
     evidence.remove_lock(db, p.user, addr, lock_id)
 
 
@@ -45,5 +45,5 @@ def add_bookmark(body: BookmarkIn, p: Operator, db: DbDep, addr: Address) -> Any
 
 
 @router.delete("/bookmarks/{bookmark_id}", status_code=204, responses=NOT_FOUND, summary="Delete a bookmark")
-def remove_bookmark(bookmark_id: int, p: Operator, db: DbDep, addr: Address) -> None:
+def remove_bookmark(bookmark_id: RowId, p: Operator, db: DbDep, addr: Address) -> None:
     evidence.remove_bookmark(db, p.user, addr, bookmark_id)

@@ -9,7 +9,7 @@ from fastapi.responses import FileResponse
 from sqlalchemy import select
 
 from server.db.models import Export
-from server.deps import Address, CtxDep, DbDep, Operator
+from server.deps import Address, CtxDep, DbDep, Operator, RowId
 from server.recording_schemas import ExportIn, ExportOut
 from server.schemas import Message
 from server.services import audit
@@ -35,13 +35,13 @@ def list_exports(_p: Operator, db: DbDep) -> list[Any]:
 
 @router.get("/{export_id}", response_model=ExportOut, responses={404: {"model": Message}},
             summary="An export's status and progress")
-def export_status(export_id: int, _p: Operator, db: DbDep) -> Any:
+def export_status(export_id: RowId, _p: Operator, db: DbDep) -> Any:
     return get_export(db, export_id)
 
 
 @router.get("/{export_id}/download", response_class=FileResponse,
             responses={404: {"model": Message}, 409: {"model": Message}}, summary="The finished export (zip)")
-def download(export_id: int, ctx: CtxDep, _p: Operator, db: DbDep) -> FileResponse:
+def download(export_id: RowId, ctx: CtxDep, _p: Operator, db: DbDep) -> FileResponse:
     row = get_export(db, export_id)
     if row.status != "done" or row.path is None:
         raise HTTPException(409, f"export {export_id} is {row.status}, not done")

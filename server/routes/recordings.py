@@ -8,7 +8,7 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Query
 from fastapi.responses import FileResponse, PlainTextResponse, Response
 
-from server.deps import CtxDep, DbDep, Viewer
+from server.deps import CtxDep, DbDep, RowId, Viewer
 from server.recording_schemas import Camera, SegmentOut, TelemetryRecord
 from server.schemas import Message
 from server.services import hls, playback
@@ -27,7 +27,7 @@ def list_recordings(_p: Viewer, db: DbDep, camera: Camera | None = None, start: 
 
 @router.get("/recordings/{seg_id}/file", response_class=FileResponse, responses=NOT_FOUND,
             summary="A segment's fragmented MP4 (HTTP range requests)")
-def recording_file(seg_id: int, ctx: CtxDep, _p: Viewer, db: DbDep) -> FileResponse:
+def recording_file(seg_id: RowId, ctx: CtxDep, _p: Viewer, db: DbDep) -> FileResponse:
     seg = seg_service.get_segment(db, seg_id)
     return FileResponse(ctx.settings.data_dir / seg.path, media_type="video/mp4")
 
@@ -44,7 +44,8 @@ def playback_frame(ctx: CtxDep, _p: Viewer, db: DbDep, camera: Camera, t: Time) 
         "Cache-Control": "private, max-age=3600"})
 
 
-@router.get("/playback/{camera}.m3u8", response_class=PlainTextResponse, responses=NOT_FOUND,
+@router.get("/playback/{camera}.m3u8", response_class=Response,
+            responses={**NOT_FOUND, 200: {"content": {"application/vnd.apple.mpegurl": {}}}},
             summary="HLS (fMP4) playlist of a camera's footage in start..end, for hls.js")
 def playlist(camera: Camera, ctx: CtxDep, _p: Viewer, db: DbDep, start: Time, end: Time) -> PlainTextResponse:
     segs = [s for s in seg_service.list_segments(db, camera, start, end, 20000) if s.status != "open"]

@@ -6,7 +6,7 @@ from typing import Any
 
 from fastapi import APIRouter
 
-from server.deps import Address, CtxDep, DbDep, Operator, Viewer
+from server.deps import Address, CtxDep, DbDep, Operator, RowId, Viewer
 from server.schemas import GotoRequest, JogRequest, Message, ModeRequest, PointRequest, Preset, PresetIn, ServoStatus
 from server.services import control
 
@@ -53,11 +53,11 @@ def create_preset(body: PresetIn, ctx: CtxDep, p: Operator, db: DbDep, addr: Add
 
 @router.post("/presets/{preset_id}/goto", response_model=ServoStatus, responses={404: {"model": Message}, **ERRORS},
              summary="Go to a preset (switches to manual)")
-def goto_preset(preset_id: int, ctx: CtxDep, p: Operator, db: DbDep, addr: Address) -> dict[str, Any]:
+def goto_preset(preset_id: RowId, ctx: CtxDep, p: Operator, db: DbDep, addr: Address) -> dict[str, Any]:
     pr = control.get_preset(db, preset_id)
     return control.goto(db, ctx.runtime, p.user, addr, pr.pan_deg, pr.tilt_deg, "preset.goto", pr.name)
 
 
 @router.delete("/presets/{preset_id}", status_code=204, responses={404: {"model": Message}}, summary="Delete a preset")
-def delete_preset(preset_id: int, p: Operator, db: DbDep, addr: Address) -> None:
+def delete_preset(preset_id: RowId, p: Operator, db: DbDep, addr: Address) -> None:
     control.delete_preset(db, p.user, addr, preset_id)

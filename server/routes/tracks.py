@@ -6,7 +6,7 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, Query
 
-from server.deps import Address, CtxDep, DbDep, Operator, Viewer
+from server.deps import Address, CtxDep, DbDep, Operator, RowId, Viewer
 from server.schemas import Message, TrackDetail, TrackOut
 from server.services import control
 from server.services import tracks as track_service
@@ -23,13 +23,13 @@ def list_tracks(_p: Viewer, db: DbDep, start: Annotated[float | None, Query(desc
 
 @router.post("/{track_id}/primary", status_code=204, responses={404: {"model": Message}, 409: {"model": Message}},
              summary="Make a live track (the telemetry's track_id) the primary target")
-def primary(track_id: int, ctx: CtxDep, p: Operator, db: DbDep, addr: Address) -> None:
+def primary(track_id: RowId, ctx: CtxDep, p: Operator, db: DbDep, addr: Address) -> None:
     control.select_primary(db, ctx.runtime, p.user, addr, track_id)
 
 
 @router.get("/{track_id}", response_model=TrackDetail, responses={404: {"model": Message}},
             summary="One track with its trajectory (x, y, z m; r m; θ, φ deg)")
-def get_track(track_id: int, _p: Viewer, db: DbDep) -> TrackDetail:
+def get_track(track_id: RowId, _p: Viewer, db: DbDep) -> TrackDetail:
     tr, pts = track_service.get_track(db, track_id)
     return TrackDetail.model_validate({**TrackOut.model_validate(tr).model_dump(), "trajectory": pts},
                                       from_attributes=True)

@@ -6,7 +6,7 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, Query
 
-from server.deps import Address, Admin, DbDep
+from server.deps import Address, Admin, DbDep, RowId
 from server.schemas import AuditOut, Message, UserIn, UserOut, UserPatch
 from server.services import audit
 from server.services import users as user_service
@@ -30,7 +30,7 @@ def create_user(body: UserIn, p: Admin, db: DbDep, addr: Address) -> Any:
 
 @router.patch("/users/{user_id}", response_model=UserOut, responses={404: {"model": Message}, 409: {"model": Message}},
               summary="Change password (ends the user's sessions), role or disabled")
-def patch_user(user_id: int, body: UserPatch, p: Admin, db: DbDep, addr: Address) -> Any:
+def patch_user(user_id: RowId, body: UserPatch, p: Admin, db: DbDep, addr: Address) -> Any:
     user = user_service.update_user(db, user_service.get_user(db, user_id), body.password, body.role, body.disabled)
     audit.record(db, p.user, addr, "user.update", user.username,
                  {k: v for k, v in body.model_dump(exclude_none=True).items() if k != "password"}
@@ -41,7 +41,7 @@ def patch_user(user_id: int, body: UserPatch, p: Admin, db: DbDep, addr: Address
 
 @router.delete("/users/{user_id}", status_code=204, responses={404: {"model": Message}, 409: {"model": Message}},
                summary="Delete a user")
-def delete_user(user_id: int, p: Admin, db: DbDep, addr: Address) -> None:
+def delete_user(user_id: RowId, p: Admin, db: DbDep, addr: Address) -> None:
     user = user_service.get_user(db, user_id)
     user_service.delete_user(db, user)
     audit.record(db, p.user, addr, "user.delete", user.username)

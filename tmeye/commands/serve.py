@@ -28,6 +28,10 @@ def register(subparsers: Any) -> None:
     p.add_argument("--log-level", choices=("debug", "info", "warning", "error"))
     p.add_argument("--stamp-frames", action="store_true", default=None,
                    help="measurement mode: the video carries the frame index in its top-left corner")
+    p.add_argument("--tls-cert", help="PEM certificate: serve HTTPS directly (with --tls-key)")
+    p.add_argument("--tls-key", help="PEM private key of --tls-cert")
+    p.add_argument("--trusted-proxy", action="append", metavar="ADDR",
+                   help="reverse proxy address or network whose X-Forwarded-For/-Proto are believed (repeatable)")
     p.set_defaults(func=run)
 
 
@@ -40,7 +44,8 @@ def settings_from(args: argparse.Namespace) -> Any:
     given = {k: v for k, v in {"host": args.host, "port": args.port, "data_dir": args.data_dir,
                                "source": args.source, "scenario": args.scenario, "seed": args.seed,
                                "rig": args.rig, "servo": args.servo, "log_level": args.log_level,
-                               "stamp_frames": args.stamp_frames}.items()
+                               "stamp_frames": args.stamp_frames, "tls_cert": args.tls_cert,
+                               "tls_key": args.tls_key, "trusted_proxies": args.trusted_proxy}.items()
              if v is not None}
     if args.inputs:
         given["inputs"] = list(args.inputs)
@@ -48,6 +53,18 @@ def settings_from(args: argparse.Namespace) -> Any:
         return Settings(**given)
     except ValidationError as exc:
         raise UserError(f"bad setting: {one_line(exc)}") from None
+
+
+def tls_and_proxies(settings: Any) -> dict[str, Any]:
+    """uvicorn options: the TLS certificate and key, and X-Forwarded-* honoured only from trusted proxies."""
+    opts: dict[str, Any] = {"proxy_headers": bool(settings.trusted_proxies),
+                            "forwarded_allow_ips": list(settings.trusted_proxies)}
+    if settings.tls_cert:
+        for what, path in (("certificate", settings.tls_cert), ("key", settings.tls_key)):
+            if not path.is_file():
+                raise UserError(f"TLS {what} {path} is not a readable file")
+        opts.update(ssl_certfile=str(settings.tls_cert), ssl_keyfile=str(settings.tls_key))
+    return opts
 
 
 def run(args: argparse.Namespace) -> int:
@@ -65,13 +82,15 @@ def run(args: argparse.Namespace) -> int:
     except OSError as exc:
         raise UserError(f"cannot listen on {settings.host}:{settings.port}: {exc.strerror or exc}") from None
     port = sock.getsockname()[1]
-    url = f"http://{settings.host}:{port}/"
+    scheme = "https" if settings.tls_cert else "http"
+    url = f"{scheme}://{settings.host}:{port}/"
     pw = settings.data_dir / "initial-admin-password"
     print(f"TMEye console: {url}  (API docs {url}api/docs)", flush=True)
     print(f"log in as 'admin'; on first start its password is written to {pw.resolve()}", flush=True)
     config = uvicorn.Config(create_app(settings), log_config=None, log_level=settings.log_level,
                             timeout_graceful_shutdown=2, ws_ping_interval=settings.ws_ping_s,
-                            ws_ping_timeout=settings.ws_ping_s, ws_per_message_deflate=False, access_log=False)
+                            ws_ping_timeout=settings.ws_ping_s, ws_per_message_deflate=False, access_log=False,
+                            **tls_and_proxies(settings))
     server = uvicorn.Server(config)
     server.run(sockets=[sock])
     if not server.started:
