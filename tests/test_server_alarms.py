@@ -141,7 +141,7 @@ def maestro_server(tmp_path: Path) -> Iterator[tuple[Server, Any]]:
     from test_servo_serial import FakeMaestro, PtyDevice
 
     dev = PtyDevice(tmp_path / "ttyMaestro", FakeMaestro())
-    s = start_server(tmp_path / "data", "--servo", f"maestro:{dev.link}?timeout=0.1")
+    s = start_server(tmp_path / "data", "--servo", f"maestro:{dev.link}?timeout=0.5")
     yield s, dev
     s.stop()
     dev.unplug()

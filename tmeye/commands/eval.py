@@ -25,6 +25,7 @@ def register(subparsers: Any) -> None:
     p.add_argument("--alarms", action="store_true", help="alarm rules (zone, range, approach) on the endless "
                    "scene against its true target positions (with --minutes, --seed)")
     p.add_argument("--minutes", type=float, default=10.0, help="simulated minutes of --alarms (default 10)")
+    p.add_argument("--start", type=float, default=0.0, help="--alarms: scene time (s) to start at (default 0)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
 
@@ -50,7 +51,9 @@ def run(args: argparse.Namespace) -> int:
             raise UserError(f"--minutes must be above 0 and at most 600, got {args.minutes:g}")
         from tmeye.alarm_eval import evaluate_alarms
 
-        emit(evaluate_alarms(args.minutes, args.seed, progress=Progress("eval alarms")), True)
+        if args.start < 0:
+            raise UserError(f"--start must be at least 0, got {args.start:g}")
+        emit(evaluate_alarms(args.minutes, args.seed, progress=Progress("eval alarms"), start_s=args.start), True)
         return 0
     if not args.scenario:
         raise UserError("give --scenario NAME, --alarms or --list")
