@@ -11,7 +11,7 @@ DATA ?= ./tmeye-data
 
 WEB_SRC := $(shell find web/src web/index.html web/vite.config.ts web/tsconfig.json web/openapi.json -type f 2>/dev/null)
 
-.PHONY: setup run track test lint typecheck dbcheck unit web clean
+.PHONY: setup run track test lint typecheck dbcheck unit web openapi clean
 
 $(STAMP): pyproject.toml
 	@$(PY) -c "import venv, ensurepip" 2>/dev/null || (apt-get update && apt-get install -y python3-venv)
@@ -34,6 +34,12 @@ web/dist/index.html: web/node_modules/.package-lock.json $(WEB_SRC)
 	cd web && npm run build
 
 web: web/dist/index.html
+
+# The server's OpenAPI document for the console, and the TypeScript types generated from it.
+openapi: $(STAMP) web/node_modules/.package-lock.json
+	$(BIN)/python -c "import json; from server.app import create_app; from server.settings import Settings; \
+	print(json.dumps(create_app(Settings()).openapi(), indent=4, ensure_ascii=False))" > web/openapi.json
+	cd web && npm run gen:api
 
 setup: $(STAMP) web /usr/bin/chromium
 
