@@ -25,6 +25,8 @@ SUBPIX_CRITERIA = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 40, 1e-3)
 # Largest accepted deviation of a corner from the homography of its 2x2-square neighbourhood,
 # as a fraction of the local square size (lens distortion over two squares stays far below this).
 REGULARITY_TOL = 0.12
+# Smallest mean grey-level difference between dark and light squares that decides a board's orientation.
+MIN_CELL_CONTRAST = 20.0
 
 
 @dataclass(frozen=True)
@@ -66,10 +68,12 @@ class BoardSpec:
 
 @dataclass(frozen=True)
 class Detection:
-    """Outcome of looking for the board in one image: corners (N, 2) px, or None with the reason."""
+    """Outcome of looking for the board in one image: corners (N, 2) px, or None with the reason.
+    oriented: the corner order is fixed to the board by its colours (else only to the image)."""
 
     corners: F64 | None
     reason: str = ""
+    oriented: bool = False
 
 
 def regularity_error(corners: F64, board: BoardSpec) -> float:
@@ -91,13 +95,48 @@ def regularity_error(corners: F64, board: BoardSpec) -> float:
     return worst
 
 
+def cell_contrast(gray: U8, corners: F64, board: BoardSpec) -> float:
+    """Mean grey level of the squares between the inner corners whose cell index i + j is even, less that
+    of the odd ones (grey levels); cell (i, j) lies between corners (i, j) and (i + 1, j + 1), sampled at
+    its centre on a lightly blurred image. Negative when cell (0, 0) is a dark square."""
+    g = corners.reshape(board.rows, board.cols, 2)
+    centres = 0.25 * (g[:-1, :-1] + g[:-1, 1:] + g[1:, :-1] + g[1:, 1:])  # (rows-1, cols-1, 2)
+    blur = cv2.GaussianBlur(gray, (5, 5), 0)
+    pts = centres.reshape(-1, 1, 2).astype(np.float32)
+    vals = cv2.remap(blur, pts[..., 0], pts[..., 1], cv2.INTER_LINEAR).astype(np.float64).ravel()
+    i, j = np.meshgrid(np.arange(board.rows - 1), np.arange(board.cols - 1), indexing="ij")
+    even = ((i + j) % 2 == 0).ravel()
+    return float(vals[even].mean() - vals[~even].mean())
+
+
+def orient_by_colour(gray: U8, corners: F64, board: BoardSpec) -> F64 | None:
+    """Order the corners so that cell (0, 0) is a dark square, fixing the corner order to the board
+    itself (OpenCV may return a grid or its 180° turn, and the two cameras of a pair may differ). Only a
+    board whose cols + rows is odd changes colour under a 180° turn; None for the others, or when the
+    squares' contrast is below MIN_CELL_CONTRAST grey levels."""
+    if (board.cols + board.rows) % 2 == 0:
+        return None
+    c = cell_contrast(gray, corners, board)
+    if abs(c) < MIN_CELL_CONTRAST:
+        return None
+    return corners[::-1].copy() if c > 0 else corners
+
+
 def canonical_order(corners: F64, board: BoardSpec) -> F64:
-    """Make the corner order independent of OpenCV's choice between a grid and its 180° turn: the first
-    corner is the one nearer the image's top-left (so left and right views of one board correspond)."""
+    """For a board symmetric under a 180° turn (cols + rows even): the first corner is the one nearer
+    the image's top-left. A stereo pair's two views are then aligned by `align_pair`."""
     first, last = corners[0], corners[-1]
     if (last[0] - first[0]) + (last[1] - first[1]) < 0:
         return corners[::-1].copy()
     return corners
+
+
+def align_pair(left: F64, right: F64) -> F64:
+    """The right view's corners in the order of the left's, for a board whose colours cannot tell its
+    180° turns apart: the cameras of a rig are nearly parallel, so the first-to-last corner directions
+    of one board point the same way in both images (reversed if they point apart)."""
+    dl, dr = left[-1] - left[0], right[-1] - right[0]
+    return right[::-1].copy() if float(dl @ dr) < 0 else right
 
 
 def detect_board(gray: U8, board: BoardSpec) -> Detection:
@@ -112,11 +151,14 @@ def detect_board(gray: U8, board: BoardSpec) -> Detection:
     spacing = _min_spacing(c.reshape(-1, 2).astype(np.float64), board)
     half = int(max(2, min(SUBPIX_HALF_WINDOW, np.floor(spacing * 0.45))))
     refined = cv2.cornerSubPix(gray, c.astype(np.float32), (half, half), (-1, -1), SUBPIX_CRITERIA)
-    corners = canonical_order(refined.reshape(-1, 2).astype(np.float64), board)
+    corners = refined.reshape(-1, 2).astype(np.float64)
     err = regularity_error(corners, board)
     if err > REGULARITY_TOL:
         return Detection(None, f"irregular corner grid (deviation {err:.2f} of a square > {REGULARITY_TOL})")
-    return Detection(corners)
+    oriented = orient_by_colour(gray, corners, board)
+    if oriented is None:
+        return Detection(canonical_order(corners, board), oriented=False)
+    return Detection(oriented, oriented=True)
 
 
 def _min_spacing(corners: F64, board: BoardSpec) -> float:

@@ -10,7 +10,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from calibration.board import BoardSpec, detect_board
+from calibration.board import BoardSpec, align_pair, detect_board
 from calibration.errors import BoardSizeError, ImageMismatchError, UnreadableImageError
 from calibration.stereo import Skip, ViewSet, check_enough
 
@@ -47,6 +47,7 @@ def detect_pairs(
     skipped: list[Skip] = []
     size: tuple[int, int] | None = None
     for v, pair in enumerate(zip(left, right, strict=True)):
+        oriented = [False, False]
         for c, path in enumerate(pair):
             img = read_gray(path)
             this = (int(img.shape[1]), int(img.shape[0]))
@@ -59,7 +60,9 @@ def detect_pairs(
             if det.corners is None:
                 skipped.append(Skip(str(path), det.reason))
             else:
-                obs[c, v], seen[c, v] = det.corners, True
+                obs[c, v], seen[c, v], oriented[c] = det.corners, True, det.oriented
+        if seen[0, v] and seen[1, v] and not all(oriented):
+            obs[1, v] = align_pair(obs[0, v], obs[1, v])
         say(f"[{v + 1}/{V}] {pair[0].name} {'ok' if seen[0, v] else '--'}  {pair[1].name} "
             f"{'ok' if seen[1, v] else '--'}")
     if not seen.any():

@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 from tracker.frames import FrameError, GimbalState, StereoFrame, check_pair
 from tracker.geometry import Camera, gimbal_rotation
 from tracker.rectify import Rectifier
+from tracker.rigcheck import check_disparity_range, check_disparity_sign
 
 F32 = NDArray[np.float32]
 F64 = NDArray[np.float64]
@@ -125,13 +126,29 @@ def _distort_points(cam: Camera, x: F32, y: F32, z: F32) -> tuple[F32, F32]:
     return u, yd
 
 
+def match_support(lr: U8, rr: U8, nd: int) -> int:
+    """Number of confident positive disparities (0.5 px to nd px) of a rectified pair (H, W), matched at
+    half resolution by SGBM with its uniqueness and left-right checks."""
+    a, b = cv2.pyrDown(lr), cv2.pyrDown(rr)
+    n = 16 * int(np.ceil(nd / 32))
+    sgbm = cv2.StereoSGBM.create(minDisparity=0, numDisparities=n, blockSize=5, P1=8 * 25, P2=32 * 25,
+                                 disp12MaxDiff=1, uniquenessRatio=10, speckleWindowSize=50, speckleRange=2)
+    disp = np.asarray(sgbm.compute(a, b))[:, n:].astype(np.float32) / 16.0
+    return int(np.sum(disp > 0.5))
+
+
 class BackgroundDepth:
     """Inverse distance 1/ρ (1/m) of the static background per world direction (0 = unknown), stored on a
     virtual pinhole canvas of focal `f` pixels looking along the gimbal base's z axis."""
 
-    def __init__(self, rect: Rectifier, pan_range_deg: float = 25.0, tilt_range_deg: float = 12.0):
+    def __init__(self, rect: Rectifier, pan_range_deg: float = 25.0, tilt_range_deg: float = 12.0,
+                 near_m: float = 2.5):
         self.rect = rect
         w, h = rect.rig.left.size
+        self.near_m = near_m
+        # disparity search length (px): f b / near_m, bounded by half the image width (RigError beyond)
+        self.num_disparities = check_disparity_range(rect.f, rect.b, near_m, w)
+        self._sign_checked = False
         self.f = rect.f
         self.pad = (int(self.f * np.tan(np.radians(pan_range_deg))),
                     int(self.f * np.tan(np.radians(tilt_range_deg))))
@@ -160,7 +177,11 @@ class BackgroundDepth:
             raise FrameError(f"background frame size {frame.left.shape[::-1]} does not match the rig's "
                              f"{rect.rig.left.size}")
         lr, rr = rect.rectify(frame.left, 0), rect.rectify(frame.right, 1)
-        nd = max_disparity or int(16 * np.ceil(rect.f * rect.b / 2.5 / 16))
+        if not self._sign_checked:  # the first pair: would the background match better exchanged?
+            swapped = match_support(rect.rectify(frame.right, 0), rect.rectify(frame.left, 1), self.num_disparities)
+            check_disparity_sign(match_support(lr, rr, self.num_disparities), swapped, lr.size // 400)
+            self._sign_checked = True
+        nd = max_disparity or self.num_disparities
         sgbm = cv2.StereoSGBM.create(minDisparity=0, numDisparities=nd, blockSize=5, P1=8 * 25, P2=32 * 25,
                                      disp12MaxDiff=1, uniquenessRatio=5, speckleWindowSize=100,
                                      speckleRange=2, mode=cv2.STEREO_SGBM_MODE_HH)

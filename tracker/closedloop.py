@@ -235,7 +235,7 @@ def widen_background(pipe: Pipeline, pan_range_deg: float, tilt_range_deg: float
     """Give the pipeline a background panorama covering ±pan_range_deg / ±tilt_range_deg (see
     BackgroundDepth); call before learning. Work-around: Pipeline has no parameter for the canvas range,
     so the BackgroundDepth object it shares with its subtractor is re-initialised in place."""
-    wide = BackgroundDepth(pipe.rect, pan_range_deg, tilt_range_deg)
+    wide = BackgroundDepth(pipe.rect, pan_range_deg, tilt_range_deg, near_m=pipe.bg.near_m)
     vars(pipe.bg).update(vars(wide))
     pipe.subtractor.reset_maps()
 

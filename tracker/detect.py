@@ -45,7 +45,8 @@ class DetectorConfig:
     by this fraction plus `min_disparity_gap_px`. moving_min_cells: while the cameras move, a candidate
     needs this many stride cells above the threshold unless a track is predicted inside its box (a moving
     view samples the background's edges at new sub-pixel phases, which leaves isolated residuals; a new
-    object must then cover about moving_min_cells · stride² pixels to be picked up)."""
+    object must then cover about moving_min_cells · stride² pixels to be picked up). near_m: the nearest
+    range (m) of the background: it bounds the background's disparity search to f·b / near_m."""
 
     epsilon: int = 12
     stride: int = 4
@@ -57,6 +58,7 @@ class DetectorConfig:
     min_disparity_gap_px: float = 0.5
     max_disparity: int = 160
     moving_min_cells: int = 3
+    near_m: float = 2.5
 
     def __post_init__(self) -> None:
         if not 1 <= self.epsilon <= 254:
@@ -65,6 +67,8 @@ class DetectorConfig:
             raise ValueError(f"stride must be 1, 2 or 4, got {self.stride}")
         if self.min_area_px < 1 or self.absorb_s <= 0 or self.fps <= 0:
             raise ValueError("min_area_px, absorb_s and fps must be positive")
+        if not self.near_m > 0:
+            raise ValueError(f"near_m must be a positive range in metres, got {self.near_m}")
 
 
 class _LazyMap:

@@ -140,16 +140,11 @@ class Camera:
         }
 
     @staticmethod
-    def from_dict(d: dict[str, object]) -> Camera:
-        size = d["size"]
-        assert isinstance(size, list)
-        return Camera(
-            K=np.asarray(d["K"], dtype=float).reshape(3, 3),
-            dist=np.asarray(d["dist"], dtype=float).reshape(5),
-            size=(int(size[0]), int(size[1])),
-            R_rc=np.asarray(d.get("R_rc", np.eye(3).tolist()), dtype=float).reshape(3, 3),
-            c=np.asarray(d.get("c", [0.0, 0.0, 0.0]), dtype=float).reshape(3),
-        )
+    def from_dict(d: object, side: str = "camera") -> Camera:
+        """A camera from its rig-file fields; RigError naming `side`.field when one is malformed."""
+        from tracker.rigcheck import camera_fields
+
+        return Camera(**camera_fields(d, side))
 
 
 @dataclass(frozen=True)
@@ -194,15 +189,21 @@ class StereoRig:
         }
 
     @staticmethod
-    def from_dict(d: dict[str, object]) -> StereoRig:
+    def from_dict(d: dict[str, object], baseline_limits_m: tuple[float, float] | None = None) -> StereoRig:
+        """A rig from a rig file's JSON object, checked (tracker.rigcheck): RigError names the bad field.
+        baseline_limits_m: plausible |c_right - c_left| in metres (default BASELINE_LIMITS_M)."""
+        from tracker.rigcheck import BASELINE_LIMITS_M, RigError, check_baseline
+
         if d.get("format") != RIG_FORMAT:
-            raise ValueError(f"not a TMEye rig file (format is {d.get('format')!r}, expected {RIG_FORMAT!r})")
+            raise RigError(f"not a TMEye rig file (format is {d.get('format')!r}, expected {RIG_FORMAT!r})")
         version = d.get("version")
         if version != RIG_FORMAT_VERSION:
-            raise ValueError(f"unsupported rig file version {version!r} (this TMEye reads {RIG_FORMAT_VERSION})")
-        left, right = d["left"], d["right"]
-        assert isinstance(left, dict) and isinstance(right, dict)
-        return StereoRig(Camera.from_dict(left), Camera.from_dict(right))
+            raise RigError(f"unsupported rig file version {version!r} (this TMEye reads {RIG_FORMAT_VERSION})")
+        left, right = Camera.from_dict(d.get("left"), "left"), Camera.from_dict(d.get("right"), "right")
+        if left.size != right.size:
+            raise RigError(f"field right.size: {right.size} differs from left.size {left.size}")
+        check_baseline(left.R_rc, left.c, right.c, baseline_limits_m or BASELINE_LIMITS_M)
+        return StereoRig(left, right)
 
 
 def save_rig(rig: StereoRig, path: str | Path, extra: dict[str, object] | None = None) -> None:
@@ -213,18 +214,27 @@ def save_rig(rig: StereoRig, path: str | Path, extra: dict[str, object] | None =
     Path(path).write_text(json.dumps(data, indent=2))
 
 
-def load_rig(path: str | Path) -> StereoRig:
-    """Read a rig file; raises ValueError with a one-line reason if it is not one."""
+def load_rig(path: str | Path, baseline_limits_m: tuple[float, float] | None = None) -> StereoRig:
+    """Read and check a rig file; ValueError with a one-line reason naming the file (and the field)."""
+    from tracker.rigcheck import RigError
+
     p = Path(path)
     try:
-        data = json.loads(p.read_text())
+        raw = p.read_bytes()
     except FileNotFoundError:
         raise ValueError(f"rig file not found: {p}") from None
-    except (OSError, json.JSONDecodeError) as exc:
-        raise ValueError(f"rig file {p} is unreadable: {exc}") from None
+    except OSError as exc:
+        raise ValueError(f"rig file {p} is unreadable: {exc.strerror or exc}") from None
+    try:
+        data = json.loads(raw.decode("utf-8"))
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"rig file {p} is unreadable: not UTF-8 JSON text (byte 0x{raw[exc.start]:02x} at offset "
+                         f"{exc.start})") from None
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"rig file {p} is unreadable: not valid JSON ({exc})") from None
     if not isinstance(data, dict):
         raise ValueError(f"rig file {p} does not hold a JSON object")
     try:
-        return StereoRig.from_dict(data)
-    except (KeyError, TypeError, AssertionError) as exc:
-        raise ValueError(f"rig file {p} is missing or has a malformed field: {exc}") from None
+        return StereoRig.from_dict(data, baseline_limits_m)
+    except RigError as exc:
+        raise ValueError(f"rig file {p}: {exc}") from None

@@ -61,7 +61,7 @@ class Pipeline:
                  tracker: TrackerConfig | None = None, origin: F64 | None = None):
         self.rig = rig
         self.rect = Rectifier(rig)
-        self.bg = BackgroundDepth(self.rect)
+        self.bg = BackgroundDepth(self.rect, near_m=(detector or DetectorConfig()).near_m)
         self.subtractor = StereoSubtractor(self.bg, detector)
         self.verifier = Verifier(self.subtractor, self.rect)
         self.localizer = Localizer(self.rect, origin)

@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tracker.frames import U8, check_pair
+from tracker.stereo_lk import refine_2d, support_weights
 
 F64 = NDArray[np.float64]
 F32 = NDArray[np.float32]
@@ -240,21 +241,27 @@ def match_point(
     *,
     window: int = 11,
     min_std: float = 2.0,
-    min_score: float = 0.8,
+    min_score: float = 0.5,
     uniqueness: float = 0.05,
     lr_tolerance: float = 1.5,
-    max_sigma: float = 0.5,
+    max_sigma: float = 0.2,
+    support_gamma: float = 15.0,
+    max_row_offset: float = 1.0,
 ) -> float | None:
     """Disparity d (px) of the left point (x, y) in a rectified pair, right x = x - d; None if unreliable.
 
     left, right: rectified grey uint8 (H, W). window: odd square window side (px), centred on the pixel
     column nearest x and on row y (sub-pixel, interpolated in both images alike); the disparity is assumed
-    constant over the window. The match is rejected (None) when the window or the search strip does not
-    fit in the image (the search is clipped at the left edge), the window's grey-level standard deviation
-    is below min_std, the correlation peak lies on the border of the search range, its score is below
-    min_score, a second correlation peak comes within `uniqueness` of it, the refined disparity's 1-sigma
-    exceeds max_sigma px, or the right-to-left search does not return within lr_tolerance px.
-    Raises FrameError / ValueError (one-line message) for bad arguments.
+    constant over the window, whose pixels are weighted by their likeness to the centre (adaptive support
+    weights exp(-|ΔI| / support_gamma), support_gamma in grey levels). The integer search (weighted
+    ZNCC) is refined by tracker.stereo_lk.refine_2d, which fits a row offset of the right image beside
+    the disparity (real rectifications leave rows misaligned by a fraction of a pixel).
+    The match is rejected (None) when the window or the search strip does not fit in the image (the
+    search is clipped at the left edge), the window's grey-level standard deviation is below min_std, the
+    correlation peak lies on the border of the search range, its score is below min_score, a second
+    correlation peak comes within `uniqueness` of it, the refined disparity's 1-sigma exceeds max_sigma px,
+    it moved more than 1 px or the row offset exceeds max_row_offset px, or the right-to-left search does
+    not return within lr_tolerance px. Raises FrameError / ValueError (one-line message) for bad arguments.
     """
     left, right = _check_images(left, right, max_disparity)
     if isinstance(window, bool) or not isinstance(window, int) or window < 3 or window % 2 == 0:
@@ -278,12 +285,33 @@ def match_point(
     S = np.asarray(
         cv2.getRectSubPix(right, (ws, window), (xs0 + 0.5 * (ws - 1), y), patchType=cv2.CV_32F), np.float32
     )
-    fit = _match(T, S, None, dmax + _PAD, dmax, min_score, uniqueness)
-    if fit is None or fit.sigma > max_sigma or not 0.0 <= fit.d <= max_disparity:
+    w = support_weights(T, support_gamma)
+    fit = _match(T, S, w, dmax + _PAD, dmax, min_score, uniqueness)
+    if fit is None:
         return None
-    if not _lr_consistent(left, right, x, x - fit.d, y, h, max_disparity, lr_tolerance):
+    fine = refine_2d(T, right, xc, y, fit.d, w)
+    if fine is None or fine.sigma > max_sigma or abs(fine.d - fit.d) > 1.0 or abs(fine.dy) > max_row_offset:
         return None
-    return fit.d
+    d = _refine_on_row(T, right, w, xs0, ws, y + fine.dy, dmax + _PAD - fine.d)
+    if d is None or abs(d - fine.d) > 0.5 or not 0.0 <= d <= max_disparity:
+        return None
+    if not _lr_consistent(left, right, x, x - d, y, h, max_disparity, lr_tolerance):
+        return None
+    return d
+
+
+def _refine_on_row(T: F32, right: U8, w: F32, xs0: int, ws: int, y: float, p0: float) -> float | None:
+    """The 1-D Catmull-Rom refinement (not pixel-locked) on the right strip sampled at row y (the
+    2-D fit's row offset applied) from strip position p0, with the same weights as the 2-D fit.
+    Returns the disparity (px) or None."""
+    S = np.asarray(cv2.getRectSubPix(right, (ws, T.shape[0]), (xs0 + 0.5 * (ws - 1), y), patchType=cv2.CV_32F),
+                   np.float32)
+    k = math.floor(p0)
+    if not 2 <= k <= ws - T.shape[1] - 3:
+        return None
+    fit = _refine(T, S, w.ravel().astype(np.float64), p0, k)
+    offset = ws - T.shape[1] - _PAD  # strip position p <-> disparity d = offset - p
+    return None if fit is None else offset + fit.d
 
 
 def match_region(

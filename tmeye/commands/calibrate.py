@@ -7,6 +7,8 @@ import json
 import sys
 from typing import Any
 
+import numpy as np
+
 from calibration.board import BoardSpec
 from calibration.holdout import compare_models, split
 from calibration.output import summary, write_report, write_rig
@@ -27,6 +29,8 @@ def register(subparsers: Any) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object instead of the summary")
     p.add_argument("--report", help="write a PNG report (per-view error bars, corner residuals)")
     p.add_argument("--fix-k3", action="store_true", help="hold k3 at 0 (4-coefficient lens)")
+    p.add_argument("--compare-opencv", action="store_true",
+                   help="also calibrate the same corners with OpenCV's stereoCalibrate and report its figures")
     p.set_defaults(func=run)
 
 
@@ -45,6 +49,10 @@ def run(args: argparse.Namespace) -> int:
     if held is not None:
         cmp = compare_models(cal, held)
         out["held_out"] = {"views": cmp.views, "board_rms": cmp.board_rms, "better_model": cmp.best}
+    if args.compare_opencv:
+        from calibration.compare import opencv_stereo
+
+        out["opencv"] = opencv_stereo(train.subset(np.isin(train.names, cal.names))).to_json()
     write_rig(cal, args.out, args.model)
     if args.report:
         write_report(cal, args.report)
@@ -78,5 +86,10 @@ def _readable(s: dict[str, Any], path: str) -> str:
         h = s["held_out"]
         figs = ", ".join(f"{k} {v:.5f}" for k, v in h["board_rms"].items())
         lines.append(f"held-out views {h['views']}: board-shape RMS {figs} -> {h['better_model']} is better")
+    if "opencv" in s:
+        o = s["opencv"]
+        lines.append(f"OpenCV stereoCalibrate on the same corners: rectified row error mean "
+                     f"{o['rectified_row_error_mean_px']:.3f} px, RMS {o['rectified_row_error_rms_px']:.3f} px; "
+                     f"RMS reprojection {o['stereo_rms_px']:.3f} px")
     lines.append(f"wrote {path}")
     return "\n".join(lines)

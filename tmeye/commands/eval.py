@@ -26,6 +26,9 @@ def register(subparsers: Any) -> None:
                    "scene against its true target positions (with --minutes, --seed)")
     p.add_argument("--minutes", type=float, default=10.0, help="simulated minutes of --alarms (default 10)")
     p.add_argument("--start", type=float, default=0.0, help="--alarms: scene time (s) to start at (default 0)")
+    p.add_argument("--matching", metavar="DIR",
+                   help="instead: point matching (tracker.stereo.match_point) against OpenCV StereoSGBM on the "
+                        "rectified pairs with known disparity under DIR (NAME/im2.png, im6.png, disp2.png, disp6.png)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
 
@@ -40,6 +43,9 @@ def _scenarios() -> dict[str, str]:
 
 def run(args: argparse.Namespace) -> int:
     names = _scenarios()
+    if args.matching:
+        emit(_matching(args.matching), args.json)
+        return 0
     if args.list:
         for name, desc in names.items():
             print(f"{name:14s} {desc}")
@@ -96,3 +102,17 @@ def _closed_loop(args: argparse.Namespace) -> dict[str, object]:
     report = evaluate_closed_loop(args.scenario, frames=args.frames, seed=args.seed,
                                   progress=Progress(f"eval {args.scenario}"))
     return report.to_json()
+
+
+def _matching(root: str) -> dict[str, object]:
+    """Per pair: points, and for match_point and SGBM the answered share, median error, share > 1 px."""
+    from pathlib import Path
+
+    from tracker.matching_eval import evaluate_matching
+
+    if not Path(root).is_dir():
+        raise UserError(f"--matching {root!r} is not a directory")
+    pairs = evaluate_matching(Path(root))
+    out: dict[str, object] = {p.name: p.to_json() for p in pairs}
+    out["match_point_beats_sgbm_on_every_pair"] = all(p.beats_sgbm for p in pairs)
+    return out

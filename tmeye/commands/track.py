@@ -24,6 +24,8 @@ def register(subparsers: Any) -> None:
     p.add_argument("--frames", type=int, help="stop after this many frames")
     p.add_argument("--origin", default="0,0,0",
                    help="X,Y,Z (m, gimbal-base frame) about which r, θ and φ are given (default 0,0,0)")
+    p.add_argument("--baseline-limits", metavar="MIN,MAX",
+                   help="plausible rig baselines in metres the rig file is checked against (default 0.01,10)")
     p.add_argument("--json", action="store_true", help="one JSON line per frame")
     p.add_argument("--fast", action="store_true",
                    help="simulated source: run as fast as possible instead of at the scenario's frame rate")
@@ -46,6 +48,19 @@ def parse_origin(text: str) -> tuple[float, float, float]:
     return xyz[0], xyz[1], xyz[2]
 
 
+def parse_limits(text: str | None) -> tuple[float, float] | None:
+    """"MIN,MAX" baseline limits in metres -> (min, max) with 0 < min < max; UserError otherwise."""
+    if text is None:
+        return None
+    try:
+        lo, hi = (float(v) for v in text.split(","))
+    except ValueError:
+        lo = hi = float("nan")
+    if not 0 < lo < hi < float("inf"):
+        raise UserError(f"--baseline-limits must be MIN,MAX metres with 0 < MIN < MAX, got {text!r}")
+    return lo, hi
+
+
 def _line(tm: dict[str, Any]) -> str:
     if not tm["detected"]:
         return f"frame {tm['frame']:>6}  no target{'':52s} {tm['fps']:6.1f} fps"
@@ -65,7 +80,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         cfg = RuntimeConfig(source=args.source, inputs=tuple(args.inputs), scenario=args.scenario, seed=args.seed,
                             rig=args.rig, servo=args.servo, realtime=not args.fast and args.source == "sim",
-                            loop_source=args.loop, max_frames=args.frames, origin=parse_origin(args.origin))
+                            loop_source=args.loop, max_frames=args.frames, origin=parse_origin(args.origin),
+                            baseline_limits_m=parse_limits(args.baseline_limits))
         runtime = Runtime(cfg)
         sub = runtime.hub.subscribe(maxsize=1024, name="track")
         runtime.start()

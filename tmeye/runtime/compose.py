@@ -7,6 +7,8 @@ Problems a user can fix (unknown scenario, missing rig file, a source or servo t
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -20,6 +22,7 @@ from tracker.evaluation import survey_poses
 from tracker.frames import FrameSource
 from tracker.geometry import StereoRig, load_rig
 from tracker.pipeline import Pipeline
+from tracker.rigcheck import RigError
 from tracker.servo import ServoError, SimulatedGimbal, open_servo
 from tracker.servo.base import AxisLimits, ServoDriver
 from tracker.sim.scenarios import SimRig, get_scenario
@@ -59,16 +62,26 @@ def compose(cfg: RuntimeConfig, tuning: TrackerTuning | None = None, rig: Stereo
     tuning = tuning or TrackerTuning()
     if rig is None and cfg.rig:
         try:
-            rig = load_rig(cfg.rig)
+            rig = load_rig(cfg.rig, cfg.baseline_limits_m)
         except (OSError, ValueError, KeyError) as exc:
-            raise ComposeError(f"rig file {cfg.rig}: {exc}") from None
+            raise ComposeError(str(exc)) from None
     if cfg.source == "sim":
         return _compose_sim(cfg, tuning, rig)
     return _compose_real(cfg, tuning, rig)
 
 
 def _pipeline(rig: StereoRig, cfg: RuntimeConfig, tuning: TrackerTuning, fps: float) -> Pipeline:
-    return Pipeline(rig, replace(tuning.detector, fps=fps), tuning.tracks, origin=np.array(cfg.origin, float))
+    with _rig_errors(cfg):
+        return Pipeline(rig, replace(tuning.detector, fps=fps), tuning.tracks, origin=np.array(cfg.origin, float))
+
+
+@contextmanager
+def _rig_errors(cfg: RuntimeConfig) -> Iterator[None]:
+    """A RigError (the rig against the settings or the first frames) as a ComposeError naming the file."""
+    try:
+        yield
+    except RigError as exc:
+        raise ComposeError(f"rig file {cfg.rig}: {exc}" if cfg.rig else f"rig: {exc}") from None
 
 
 def _compose_sim(cfg: RuntimeConfig, tuning: TrackerTuning, rig: StereoRig | None) -> Composition:
@@ -94,8 +107,9 @@ def _compose_sim(cfg: RuntimeConfig, tuning: TrackerTuning, rig: StereoRig | Non
             loop = _loop(pipe, controller, driver)
         else:
             poses = survey_poses(scenario)
-        for g in poses:
-            pipe.learn_background(sim.background(g))
+        with _rig_errors(cfg):
+            for g in poses:
+                pipe.learn_background(sim.background(g))
     except BaseException:
         if driver is not None:
             driver.close()
@@ -125,8 +139,15 @@ def _compose_real(cfg: RuntimeConfig, tuning: TrackerTuning, rig: StereoRig | No
             driver.close()
         raise
     fps = float(getattr(src, "fps", 0.0) or 30.0)
-    pipe = _pipeline(rig, cfg, tuning, fps)
-    pipe.learn_background(first)  # the first pair is taken as the empty background
+    try:
+        pipe = _pipeline(rig, cfg, tuning, fps)
+        with _rig_errors(cfg):
+            pipe.learn_background(first)  # the first pair is taken as the empty background
+    except BaseException:
+        src.close()
+        if driver is not None:
+            driver.close()
+        raise
     controller = _controller(pipe, tuning) if driver is not None else None
     loop = _loop(pipe, controller, driver) if controller is not None and driver is not None else None
     return Composition(cfg, rig, src, pipe, loop, controller, driver, None, fps)
