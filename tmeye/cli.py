@@ -13,7 +13,7 @@ from tmeye.errors import UserError
 __all__ = ["UserError", "build_parser", "main"]
 
 # Sub-command modules, each with register(subparsers) setting `func` on its parser.
-COMMANDS = ("track", "eval", "bench", "calibrate", "serve", "user")
+COMMANDS = ("track", "eval", "bench", "calibrate", "serve", "user", "soak")
 
 
 def build_parser() -> argparse.ArgumentParser:
