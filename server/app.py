@@ -58,7 +58,10 @@ from tmeye.media.pipeline import MediaConfig, MediaPipeline
 from tmeye.runtime import Runtime, RuntimeConfig, TrackerTuning
 
 log = logging.getLogger("tmeye.server")
-WEB_DIST = Path(__file__).resolve().parents[1] / "web" / "dist"
+# The built console: inside the package when installed from a wheel (setup.py puts it there), else the
+# checkout's web/dist.
+_PACKAGED_WEB = Path(__file__).resolve().parent / "web_dist"
+WEB_DIST = _PACKAGED_WEB if _PACKAGED_WEB.is_dir() else Path(__file__).resolve().parents[1] / "web" / "dist"
 
 
 def load_key(data_dir: Path) -> bytes:

@@ -85,6 +85,7 @@ class Status(BaseModel):
     skipped_frames: int
     frames_processed: int
     frame_errors: int
+    source_faults: int = Field(0, description="source faults (a read that failed or stalled) since the start")
     source: dict[str, Any]
     servo: ServoStatus
     faults: list[Fault]

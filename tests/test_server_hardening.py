@@ -230,3 +230,23 @@ def test_bad_tls_and_proxy_settings_are_one_line_errors(tmp_path: Path) -> None:
                             str(tmp_path / "d"), *args], cwd=ROOT, capture_output=True, text=True, timeout=60)
         assert p.returncode != 0 and needle in p.stderr, (args, p.stderr)
         assert len(p.stderr.strip().splitlines()) == 1, p.stderr
+
+
+def test_a_locked_database_is_a_503_and_no_crash(server: Server) -> None:
+    import sqlite3
+
+    with server.as_admin() as a:
+        lock = sqlite3.connect(server.data_dir / "tmeye.db", timeout=1)
+        try:
+            lock.execute("BEGIN EXCLUSIVE")  # another writer holds the database past the 5 s busy timeout
+            r = a.post("/api/servo/presets", json={"name": "while-locked", "pan_deg": 1, "tilt_deg": 1})
+            assert r.status_code == 503 and "database unavailable (database is locked)" in r.json()["detail"], r.text
+            assert r.headers["retry-after"] == "5"
+            assert a.get("/api/status").json()["state"] == "running"  # reads go on (WAL)
+        finally:
+            lock.rollback()
+            lock.close()
+        assert "while-locked" not in [p["name"] for p in a.get("/api/servo/presets").json()]  # nothing half-stored
+        r = a.post("/api/servo/presets", json={"name": "after-lock", "pan_deg": 1, "tilt_deg": 1})
+        assert r.status_code == 201, r.text
+    assert httpx.get(f"{server.url}/api/health").json()["status"] == "ok"

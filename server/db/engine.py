@@ -14,6 +14,10 @@ from sqlalchemy import Engine, create_engine, event
 from sqlalchemy.orm import Session, sessionmaker
 
 ROOT = Path(__file__).resolve().parents[2]
+# The migrations: inside the package when installed from a wheel (setup.py puts them there), else the
+# checkout's alembic/ with its alembic.ini.
+_PACKAGED = Path(__file__).resolve().parents[1] / "migrations"
+MIGRATIONS = _PACKAGED if (_PACKAGED / "env.py").is_file() else ROOT / "alembic"
 BUSY_TIMEOUT_MS = 5000
 log = logging.getLogger("tmeye.db")
 
@@ -38,8 +42,10 @@ def session_factory(engine: Engine) -> sessionmaker[Session]:
 
 
 def alembic_config(url: str) -> Config:
-    cfg = Config(str(ROOT / "alembic.ini"))
-    cfg.set_main_option("script_location", str(ROOT / "alembic"))
+    ini = ROOT / "alembic.ini"
+    cfg = Config(str(ini)) if MIGRATIONS == ROOT / "alembic" and ini.is_file() else Config()
+    cfg.set_main_option("script_location", str(MIGRATIONS))
+    cfg.set_main_option("path_separator", "os")
     cfg.set_main_option("sqlalchemy.url", url)
     cfg.attributes["configure_logger"] = False
     return cfg

@@ -4,15 +4,18 @@ a list of error objects, is replaced by the `{"detail": "one line"}` the server 
 
 from __future__ import annotations
 
+import logging
 from typing import Any
 
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
+from sqlalchemy.exc import OperationalError
 
 from server.services.control import Unavailable
 from server.services.errors import Conflict, Invalid, NotFound
 
+log = logging.getLogger("tmeye.server")
 STATUS = {NotFound: 404, Conflict: 409, Invalid: 422, Unavailable: 503}
 
 
@@ -59,6 +62,16 @@ def _one_line_openapi(app: FastAPI) -> None:
 
 def install(app: FastAPI) -> None:
     _one_line_openapi(app)
+
+    async def db_unavailable(_req: Request, exc: Exception) -> JSONResponse:
+        # SQLite locked past the busy timeout, read-only, or its disk full: nothing was stored (the
+        # session rolls back), the request may be repeated
+        orig = getattr(exc, "orig", None) or exc
+        log.warning("database unavailable: %s", orig)
+        first = (str(orig).splitlines() or ["error"])[0][:200]
+        return JSONResponse({"detail": f"database unavailable ({first}); nothing was changed, try again"},
+                            status_code=503, headers={"Retry-After": "5"})
+    app.add_exception_handler(OperationalError, db_unavailable)
     async def invalid(_req: Request, exc: Exception) -> JSONResponse:
         assert isinstance(exc, RequestValidationError)
         status, msg = describe(exc)

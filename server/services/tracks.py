@@ -141,9 +141,12 @@ class TrackWriter:
         try:
             self.written += await asyncio.to_thread(flush, self.sessions, self.run_id, self.book)
             self.book.forget_before(time.time() - 60.0)
-        except Exception:
+        except Exception as exc:
             self.errors += 1
-            log.exception("writing tracks failed (kept in memory, retried at the next flush)")
+            if self.errors == 1:
+                log.exception("writing tracks failed (kept in memory, retried at the next flush)")
+            else:
+                log.warning("writing tracks failed again (%d times): %s", self.errors, str(exc).splitlines()[0])
 
 
 def list_tracks(db: Session, start: float | None, end: float | None, limit: int) -> list[Track]:

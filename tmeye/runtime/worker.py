@@ -5,7 +5,9 @@ Real time: with `realtime`, frame k is due at t0 + k / fps. A frame that took to
 skip the frames it missed (the simulator jumps ahead, a file source reads past them), so the next frame
 processed is the newest one and no queue grows; skipped frames are counted. Requests from other threads
 (servo modes, go-to, jog, tracker settings, a new rig) are queued and run in the worker between frames;
-each returns a Future. A frame that raises is logged and counted, and the worker goes on.
+each returns a Future. A frame that raises is logged and counted, and the worker goes on. A source that
+raises or blocks is a `source` fault in the status (tmeye/runtime/faults.py), retried with a back-off;
+after it the pacing starts afresh (the frames missed meanwhile are not counted as skipped).
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from typing import Any, TypeVar
 
 from tmeye.runtime.compose import Composition, compose, describe_source, rebuild_pipeline
 from tmeye.runtime.config import RuntimeConfig, TrackerTuning
+from tmeye.runtime.faults import SourceHealth
 from tmeye.runtime.pointing import pixel_angles
 from tmeye.runtime.publish import Hub
 from tmeye.runtime.servo import ServoControl, ServoMode
@@ -36,7 +39,6 @@ from tracker.pipeline import FrameResult
 
 log = logging.getLogger("tmeye.runtime")
 R = TypeVar("R")
-SOURCE_RETRY_S = 0.5
 
 
 @dataclass(frozen=True)
@@ -101,9 +103,15 @@ class Runtime:
         self._last_t: float | None = None
         self._last_done: float | None = None
         self.generation = 0
-        self.source_fault: str | None = None
         self.stalls = StallLog()
         self._closing = False
+        self.source_health = SourceHealth()
+        self._resync = False
+
+    @property
+    def source_fault(self) -> str | None:
+        """The frame source's fault now (it raises, or a read blocks), or None."""
+        return self.source_health.fault()
 
     # --- life cycle ----------------------------------------------------------------------------------
     def start(self, rig: StereoRig | None = None) -> None:
@@ -193,13 +201,14 @@ class Runtime:
         faults: list[dict[str, str]] = []
         if self.error:
             faults.append({"kind": "runtime", "message": self.error})
-        if self.source_fault:
-            faults.append({"kind": "source", "message": self.source_fault})
+        if (source_fault := self.source_health.fault()) is not None and self.state == "running":
+            faults.append({"kind": "source", "message": source_fault})
         if ev is not None and ev.servo is not None and ev.servo.fault:
             faults.append({"kind": "servo", "message": ev.servo.fault})
         servo = ev.servo.as_dict() if ev is not None and ev.servo is not None else None
         return {"state": self.state, "frame": ev.frame_no if ev else None, "fps": round(self.fps, 2),
                 "frames_processed": self.frames, "skipped_frames": self.skipped, "frame_errors": self.frame_errors,
+                "source_faults": self.source_health.faults,
                 "source": describe_source(self.comp) if self.comp else {"kind": self.config.source},
                 "servo": servo, "subscribers": self.hub.subscribers, "subscriptions": self.hub.stats(),
                 "faults": faults,
@@ -216,6 +225,9 @@ class Runtime:
                 self._apply_requests()
                 if not self._one_frame():
                     break
+                if self._resync:  # after a source fault: pace from the frame that ended it
+                    t0, k, self._resync = time.monotonic(), 0, False
+                    continue
                 if self.config.max_frames is not None and self.frames >= self.config.max_frames:
                     break
                 if period:
@@ -240,15 +252,15 @@ class Runtime:
         assert comp is not None
         if comp.sim is not None and comp.config.loop_source and comp.sim.exhausted:
             comp.sim.rewind()  # a finite scenario again from its start; frame times keep counting
+        self.source_health.reading()
         try:
             frame = comp.source.read()
-        except Exception as exc:  # a camera or stream error: reported, retried after a pause
-            if self.source_fault is None:
-                log.warning("source failed: %s", exc)
-            self.source_fault = f"{type(exc).__name__}: {exc}".splitlines()[0]
-            self._stop.wait(SOURCE_RETRY_S)
+        except Exception as exc:  # a camera or stream error: reported, retried after a back-off
+            self._stop.wait(self.source_health.failed(exc))
+            self._resync = True
             return True
-        self.source_fault = None
+        if self.source_health.read():
+            self._resync = True
         captured_at = time.time()  # a rendered or decoded frame exists from now on
         if frame is None:
             log.info("source ended after %d frames", self.frames)
