@@ -56,6 +56,7 @@ class AlarmService:
         self.lock = threading.Lock()
         self.rows: dict[int, int] = {}  # engine occurrence -> alarm row id
         self.probes: dict[str, Probe] = {}  # fault source (recording, database, ...) -> current fault or None
+        self.on_activated: list[Callable[[float], None]] = []  # called with each activation's time (Unix s)
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._started = time.time()
@@ -133,6 +134,10 @@ class AlarmService:
             trs = self.engine.step(snap)
             if trs:
                 self._commit(trs, None, None)
+        for tr in trs:
+            if tr.kind == "activated":
+                for hook in self.on_activated:
+                    hook(tr.t)
 
     def _commit(self, trs: list[Transition], user: User | None, address: str | None,
                 db: Session | None = None) -> list[dict[str, Any]]:
