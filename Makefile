@@ -24,6 +24,10 @@ $(STAMP): pyproject.toml
 /usr/bin/chromium:
 	apt-get update && apt-get install -y chromium
 
+# Debian's docker-compose validates docker-compose.yml in the tests (no Docker engine is needed or used).
+/usr/bin/docker-compose:
+	apt-get update && apt-get install -y docker-compose
+
 # The console: npm packages from the lock file, then tsc and the Vite build into web/dist.
 web/node_modules/.package-lock.json: web/package-lock.json
 	@command -v npm >/dev/null || { echo "make: npm (Node.js 20.19 or newer) is needed to build web/" >&2; exit 1; }
@@ -41,7 +45,7 @@ openapi: $(STAMP) web/node_modules/.package-lock.json
 	print(json.dumps(create_app(Settings()).openapi(), indent=4, ensure_ascii=False))" > web/openapi.json
 	cd web && npm run gen:api
 
-setup: $(STAMP) web /usr/bin/chromium
+setup: $(STAMP) web /usr/bin/chromium /usr/bin/docker-compose
 
 run: $(STAMP) web
 	$(BIN)/tmeye serve --host $(HOST) --port $(PORT) --data-dir $(DATA)
@@ -60,7 +64,7 @@ dbcheck: $(STAMP)
 	@d=$$(mktemp -d) && $(BIN)/alembic -x data_dir=$$d upgrade head >/dev/null 2>&1 && \
 	$(BIN)/alembic -x data_dir=$$d check; s=$$?; rm -rf $$d; exit $$s
 
-unit: $(STAMP) web /usr/bin/chromium
+unit: $(STAMP) web /usr/bin/chromium /usr/bin/docker-compose
 	$(BIN)/pytest
 
 test: lint typecheck dbcheck unit
