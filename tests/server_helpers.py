@@ -14,6 +14,8 @@ from typing import Any
 
 import httpx
 
+from tmeye.benchserver import end_with_parent
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -66,6 +68,7 @@ def start_server(data_dir: Path, *args: str, env: dict[str, str] | None = None, 
     log = data_dir / "server.log"
     cmd = [sys.executable, "-m", "tmeye", "serve", "--port", "0", "--data-dir", str(data_dir), *args]
     proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=log.open("w"), text=True,
+                            preexec_fn=end_with_parent,  # no server outlives a failed or killed test run
                             env={**os.environ, **(env or {})})
     assert proc.stdout is not None
     line = proc.stdout.readline()

@@ -31,10 +31,19 @@ def _cpu_s(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / CLK_TCK  # utime + stime
 
 
+def end_with_parent() -> None:
+    """In a child process before exec (Linux): SIGTERM when the parent ends, so that a measuring or test
+    process that dies or is killed leaves no server running."""
+    import ctypes
+
+    with contextlib.suppress(OSError, AttributeError):
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+
+
 def _start(data: Path, extra: list[str]) -> tuple[subprocess.Popen[str], str]:
     proc = subprocess.Popen([sys.executable, "-m", "tmeye", "serve", "--port", "0", "--data-dir", str(data),
                              "--log-level", "warning", *extra], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
-                            text=True)
+                            text=True, preexec_fn=end_with_parent)
     assert proc.stdout is not None
     m = re.search(r"(http://[\d.]+:\d+)/", proc.stdout.readline())
     if not m:
