@@ -50,10 +50,11 @@ logoutBtn.addEventListener("click", async () => {
   showLogin("You are logged out.");
 });
 
-function routeOf(): { route: Route; params: string[] } {
-  const parts = location.hash.replace(/^#\/?/, "").split("/").filter(Boolean);
+function routeOf(): { route: Route; params: string[]; query: URLSearchParams } {
+  const [path, search = ""] = location.hash.replace(/^#\/?/, "").split("?", 2);
+  const parts = path.split("/").filter(Boolean);
   const route = ROUTES.find((r) => r.name === parts[0]) ?? ROUTES[0];
-  return { route, params: parts.slice(1) };
+  return { route, params: parts.slice(1), query: new URLSearchParams(search) };
 }
 
 function renderNav(active: string): void {
@@ -70,7 +71,7 @@ function renderNav(active: string): void {
 async function showPage(): Promise<void> {
   if (!session) return;
   const token = ++navToken;
-  const { route, params } = routeOf();
+  const { route, params, query } = routeOf();
   page?.unmount?.();
   page = null;
   status.clearSlots();
@@ -87,7 +88,7 @@ async function showPage(): Promise<void> {
     factory = await route.load!();
   }
   if (token !== navToken) return;
-  const p = await factory({ session, root, status, params });
+  const p = await factory({ session, root, status, params, query });
   if (token !== navToken) {
     p.unmount?.();
     return;

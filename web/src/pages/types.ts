@@ -7,6 +7,8 @@ export interface PageContext {
   status: StatusBar;
   /** Route parameters after the page name: #/tracks/12 gives ["12"]. */
   params: string[];
+  /** The query after the route: #/playback?t=1700000000&alarm=3 gives t and alarm. */
+  query: URLSearchParams;
 }
 
 export interface Page {
