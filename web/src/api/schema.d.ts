@@ -72,6 +72,23 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/auth/me": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /** Who is logged in: username and role */
+        get: operations["me_api_auth_me_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/api/auth/logout": {
         parameters: {
             query?: never;
@@ -468,6 +485,213 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/recordings": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /** Recorded segments overlapping start..end */
+        get: operations["list_recordings_api_recordings_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/recordings/{seg_id}/file": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /** A segment's fragmented MP4 (HTTP range requests) */
+        get: operations["recording_file_api_recordings__seg_id__file_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/playback/frame": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /** JPEG of the last frame captured at or before t, with X-Frame-Index and X-Captured-At */
+        get: operations["playback_frame_api_playback_frame_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/playback/{camera}.m3u8": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /** HLS (fMP4) playlist of a camera's footage in start..end, for hls.js */
+        get: operations["playlist_api_playback__camera__m3u8_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/telemetry": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /** Recorded telemetry of start..end: one message per recorded frame, oldest first */
+        get: operations["recorded_telemetry_api_telemetry_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/locks": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /** Evidence locks overlapping start..end */
+        get: operations["list_locks_api_locks_get"];
+        put?: never;
+        /** Keep a time range, or a track's footage (widened by the pre- and post-roll), from retention */
+        post: operations["add_lock_api_locks_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/locks/{lock_id}": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        post?: never;
+        /** Unlock (admin) */
+        delete: operations["remove_lock_api_locks__lock_id__delete"];
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/bookmarks": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /** Bookmarks in start..end */
+        get: operations["list_bookmarks_api_bookmarks_get"];
+        put?: never;
+        /** Bookmark a moment with a note */
+        post: operations["add_bookmark_api_bookmarks_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/bookmarks/{bookmark_id}": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        post?: never;
+        /** Delete a bookmark */
+        delete: operations["remove_bookmark_api_bookmarks__bookmark_id__delete"];
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/exports": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /** Exports, newest first */
+        get: operations["list_exports_api_exports_get"];
+        put?: never;
+        /** Export start..end: one MP4 per camera (not encoded again) and the telemetry, zipped */
+        post: operations["create_export_api_exports_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/exports/{export_id}": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /** An export's status and progress */
+        get: operations["export_status_api_exports__export_id__get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/exports/{export_id}/download": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /** The finished export (zip) */
+        get: operations["download_api_exports__export_id__download_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
 }
 export type webhooks = Record<string, never>;
 export interface components {
@@ -584,6 +808,32 @@ export interface components {
              * Format: password
              */
             client_secret?: string | null;
+        };
+        /**
+         * BookmarkIn
+         * @example {
+         *       "note": "van",
+         *       "t": 1795376486.8
+         *     }
+         */
+        BookmarkIn: {
+            /** T */
+            t: number;
+            /** Note */
+            note: string;
+        };
+        /** BookmarkOut */
+        BookmarkOut: {
+            /** Id */
+            id: number;
+            /** T */
+            t: number;
+            /** Note */
+            note: string;
+            /** Created At */
+            created_at: number;
+            /** Created By */
+            created_by: number | null;
         };
         /** CalibrationOut */
         CalibrationOut: {
@@ -713,6 +963,60 @@ export interface components {
              */
             moving_min_cells: number;
         };
+        /**
+         * ExportIn
+         * @example {
+         *       "cameras": [
+         *         "left",
+         *         "right"
+         *       ],
+         *       "end": 1795376540,
+         *       "start": 1795376480
+         *     }
+         */
+        ExportIn: {
+            /** Start */
+            start: number;
+            /** End */
+            end: number;
+            /**
+             * Cameras
+             * @default [
+             *       "left",
+             *       "right"
+             *     ]
+             */
+            cameras: ("left" | "right")[];
+        };
+        /** ExportOut */
+        ExportOut: {
+            /** Id */
+            id: number;
+            /**
+             * Status
+             * @enum {string}
+             */
+            status: "queued" | "running" | "done" | "failed";
+            /**
+             * Progress
+             * @description 0 to 1
+             */
+            progress: number;
+            /** Start */
+            start: number;
+            /** End */
+            end: number;
+            /** Cameras */
+            cameras: string[];
+            /** Bytes */
+            bytes: number | null;
+            /** Error */
+            error: string | null;
+            /** Created At */
+            created_at: number;
+            /** Finished At */
+            finished_at: number | null;
+        };
         /** Fault */
         Fault: {
             /** Kind */
@@ -784,6 +1088,48 @@ export interface components {
              */
             duration_s: number;
         };
+        /**
+         * LockIn
+         * @description A time range, or a track (its first to last sighting).
+         * @example {
+         *       "end": 1795376540,
+         *       "note": "intrusion at the gate",
+         *       "start": 1795376480
+         *     }
+         * @example {
+         *       "track_id": 42
+         *     }
+         */
+        LockIn: {
+            /** Start */
+            start?: number | null;
+            /** End */
+            end?: number | null;
+            /** Track Id */
+            track_id?: number | null;
+            /**
+             * Note
+             * @default
+             */
+            note: string;
+        };
+        /** LockOut */
+        LockOut: {
+            /** Id */
+            id: number;
+            /** Start */
+            start: number;
+            /** End */
+            end: number;
+            /** Track Id */
+            track_id: number | null;
+            /** Note */
+            note: string;
+            /** Created At */
+            created_at: number;
+            /** Created By */
+            created_by: number | null;
+        };
         /** LoginAnswer */
         LoginAnswer: {
             /** Access Token */
@@ -809,6 +1155,16 @@ export interface components {
              * @description send as X-CSRF-Token with cookie-authenticated unsafe requests
              */
             csrf_token: string;
+        };
+        /** Me */
+        Me: {
+            /** Username */
+            username: string;
+            /**
+             * Role
+             * @enum {string}
+             */
+            role: "viewer" | "operator" | "admin";
         };
         /** Message */
         Message: {
@@ -885,6 +1241,106 @@ export interface components {
              * @description default: the mount's current angle
              */
             tilt_deg?: number | null;
+        };
+        /** RecordingStatus */
+        RecordingStatus: {
+            /**
+             * Mode
+             * @enum {string}
+             */
+            mode: "continuous" | "events" | "off";
+            /**
+             * State
+             * @enum {string}
+             */
+            state: "recording" | "idle" | "off" | "fault";
+            /**
+             * Fault
+             * @description device fault: why recording stopped (e.g. the free-disk floor)
+             */
+            fault: string | null;
+            /**
+             * Segments
+             * @description segments closed since start
+             */
+            segments: number;
+            /** Frames */
+            frames: {
+                [key: string]: number;
+            };
+            /** Bytes */
+            bytes: number;
+            /** Errors */
+            errors: number;
+            /** Dropped Packets */
+            dropped_packets: number;
+            /** Telemetry Rows */
+            telemetry_rows: number;
+            /** Telemetry Missing */
+            telemetry_missing: number;
+        };
+        /**
+         * SegmentOut
+         * @example {
+         *       "bytes": 1893321,
+         *       "camera": "left",
+         *       "end": 1795376490,
+         *       "frames": 301,
+         *       "id": 12,
+         *       "keyframes": [
+         *         0,
+         *         1.5,
+         *         3
+         *       ],
+         *       "kind": "continuous",
+         *       "path": "recordings/2026-11-22/22/left/41.20.mp4",
+         *       "start": 1795376480,
+         *       "status": "closed"
+         *     }
+         */
+        SegmentOut: {
+            /** Id */
+            id: number;
+            /**
+             * Camera
+             * @enum {string}
+             */
+            camera: "left" | "right";
+            /**
+             * Kind
+             * @enum {string}
+             */
+            kind: "continuous" | "event";
+            /**
+             * Status
+             * @description open: being written; cut: repaired after a crash
+             * @enum {string}
+             */
+            status: "open" | "closed" | "cut";
+            /**
+             * Start
+             * @description capture time of the first frame
+             */
+            start: number;
+            /**
+             * End
+             * @description capture time of the last frame (null while open)
+             */
+            end: number | null;
+            /** Frames */
+            frames: number;
+            /** Bytes */
+            bytes: number;
+            /**
+             * Keyframes
+             * @description keyframe times in the segment (s)
+             */
+            keyframes: number[];
+            /**
+             * Path
+             * @description relative to the data directory
+             */
+            path: string;
         };
         /**
          * ServoStatus
@@ -980,6 +1436,8 @@ export interface components {
              * @description each consumer of the frames: a slow one drops its oldest messages, never delaying the tracker
              */
             subscriptions: components["schemas"]["Subscription"][];
+            /** @description the recorder; `recording.fault` is set (and a fault of kind recording listed) when recording stopped on a fault */
+            recording?: components["schemas"]["RecordingStatus"] | null;
         };
         /** Subscription */
         Subscription: {
@@ -1412,6 +1870,26 @@ export interface operations {
                 };
                 content: {
                     "application/json": components["schemas"]["Message"];
+                };
+            };
+        };
+    };
+    me_api_auth_me_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Me"];
                 };
             };
         };
@@ -2469,6 +2947,561 @@ export interface operations {
                 };
                 content: {
                     "multipart/x-mixed-replace; boundary=tmeyeframe": unknown;
+                };
+            };
+            /** @description Validation Error */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["HTTPValidationError"];
+                };
+            };
+        };
+    };
+    list_recordings_api_recordings_get: {
+        parameters: {
+            query?: {
+                camera?: ("left" | "right") | null;
+                start?: number | null;
+                end?: number | null;
+                limit?: number;
+            };
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["SegmentOut"][];
+                };
+            };
+            /** @description Validation Error */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["HTTPValidationError"];
+                };
+            };
+        };
+    };
+    recording_file_api_recordings__seg_id__file_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                seg_id: number;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content?: never;
+            };
+            /** @description Not Found */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+            /** @description Validation Error */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["HTTPValidationError"];
+                };
+            };
+        };
+    };
+    playback_frame_api_playback_frame_get: {
+        parameters: {
+            query: {
+                camera: "left" | "right";
+                /** @description Unix s */
+                t: number;
+            };
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "image/jpeg": unknown;
+                };
+            };
+            /** @description Not Found */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+            /** @description Validation Error */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["HTTPValidationError"];
+                };
+            };
+        };
+    };
+    playlist_api_playback__camera__m3u8_get: {
+        parameters: {
+            query: {
+                /** @description Unix s */
+                start: number;
+                /** @description Unix s */
+                end: number;
+            };
+            header?: never;
+            path: {
+                camera: "left" | "right";
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "text/plain": string;
+                };
+            };
+            /** @description Not Found */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "text/plain": components["schemas"]["Message"];
+                };
+            };
+            /** @description Validation Error */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["HTTPValidationError"];
+                };
+            };
+        };
+    };
+    recorded_telemetry_api_telemetry_get: {
+        parameters: {
+            query: {
+                /** @description Unix s */
+                start: number;
+                /** @description Unix s */
+                end: number;
+                limit?: number;
+            };
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": {
+                        [key: string]: unknown;
+                    }[];
+                };
+            };
+            /** @description Validation Error */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["HTTPValidationError"];
+                };
+            };
+        };
+    };
+    list_locks_api_locks_get: {
+        parameters: {
+            query?: {
+                /** @description Unix s */
+                start?: number | null;
+                /** @description Unix s */
+                end?: number | null;
+            };
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["LockOut"][];
+                };
+            };
+            /** @description Validation Error */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["HTTPValidationError"];
+                };
+            };
+        };
+    };
+    add_lock_api_locks_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody: {
+            content: {
+                "application/json": components["schemas"]["LockIn"];
+            };
+        };
+        responses: {
+            /** @description Successful Response */
+            201: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["LockOut"];
+                };
+            };
+            /** @description Not Found */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+            /** @description Unprocessable Entity */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+        };
+    };
+    remove_lock_api_locks__lock_id__delete: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                lock_id: number;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            204: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content?: never;
+            };
+            /** @description Not Found */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+            /** @description Validation Error */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["HTTPValidationError"];
+                };
+            };
+        };
+    };
+    list_bookmarks_api_bookmarks_get: {
+        parameters: {
+            query?: {
+                /** @description Unix s */
+                start?: number | null;
+                /** @description Unix s */
+                end?: number | null;
+            };
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["BookmarkOut"][];
+                };
+            };
+            /** @description Validation Error */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["HTTPValidationError"];
+                };
+            };
+        };
+    };
+    add_bookmark_api_bookmarks_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody: {
+            content: {
+                "application/json": components["schemas"]["BookmarkIn"];
+            };
+        };
+        responses: {
+            /** @description Successful Response */
+            201: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["BookmarkOut"];
+                };
+            };
+            /** @description Unprocessable Entity */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+        };
+    };
+    remove_bookmark_api_bookmarks__bookmark_id__delete: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                bookmark_id: number;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            204: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content?: never;
+            };
+            /** @description Not Found */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+            /** @description Validation Error */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["HTTPValidationError"];
+                };
+            };
+        };
+    };
+    list_exports_api_exports_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ExportOut"][];
+                };
+            };
+        };
+    };
+    create_export_api_exports_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody: {
+            content: {
+                "application/json": components["schemas"]["ExportIn"];
+            };
+        };
+        responses: {
+            /** @description Successful Response */
+            202: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ExportOut"];
+                };
+            };
+            /** @description Unprocessable Entity */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+        };
+    };
+    export_status_api_exports__export_id__get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                export_id: number;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ExportOut"];
+                };
+            };
+            /** @description Not Found */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+            /** @description Validation Error */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["HTTPValidationError"];
+                };
+            };
+        };
+    };
+    download_api_exports__export_id__download_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                export_id: number;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content?: never;
+            };
+            /** @description Not Found */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+            /** @description Conflict */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
                 };
             };
             /** @description Validation Error */
