@@ -70,6 +70,7 @@ def test_playback_steps_plays_seeks_and_exports(server: Server, chromium: Any) -
     f0, sl, sr = shown(page)
     assert sl == sr == f0 % 65536 and f0 in frames  # both cameras show exactly the frame named
     assert "Frame" in (page.get_by_test_id("frame-telemetry").text_content() or "")
+    assert page.locator(".track-plots canvas").count() >= 2  # plan and side views of the range's tracks
     page.locator("body").click(position={"x": 5, "y": 5})
     steps = []
     for _ in range(6):

@@ -4,17 +4,19 @@
 // frame's recorded telemetry; `,` and `.` step one recorded frame back or forward. Bookmarks, evidence
 // locks and export of the range.
 import Hls from "hls.js";
-import { ApiError } from "../api/client";
+import { api, ApiError } from "../api/client";
 import { type Bookmark, type Camera, type FrameTelemetry, type Lock, playbackFrame, rec } from "../api/recordings";
 import { field, h, notice } from "../lib/dom";
 import { fromLocalInput, num, time, toLocalInput } from "../lib/format";
 import { atLeast } from "../lib/session";
+import { MetricView, type XY } from "../lib/plots";
 import { drawStrip, type Marks, Timeline } from "../lib/timeline";
 import type { Page, PageContext } from "./types";
 
 const RATES = [0.125, 0.25, 0.5, 1, 2, 4, 8, 16];
 const CAMS: Camera[] = ["left", "right"];
 const WINDOW_S = 6; // telemetry fetched around the cursor for frame stepping
+const MAX_TRACKS = 40; // trajectories drawn for a range
 
 function why(e: unknown): string {
   return e instanceof ApiError ? e.detail : e instanceof Error ? e.message : String(e);
@@ -53,6 +55,8 @@ export function playbackPage(ctx: PageContext): Page {
   const exportBtn = h("button", { type: "button", disabled: !operator }, "Export the range");
   const exportOut = h("p", { class: "muted", "data-testid": "export-status", "aria-live": "polite" });
   const marksList = h("ul", { class: "marks" });
+  const planEl = h("div", { class: "plot-box tall" });
+  const sideEl = h("div", { class: "plot-box tall" });
   const roleHint = operator ? null : h("p", { class: "muted" }, "Bookmarks, locks and exports need the operator role.");
   ctx.root.replaceChildren(h("section", { class: "page wide" }, h("h1", null, "Playback"), form, msg,
     h("div", { class: "timeline" }, strip, scrub),
@@ -62,7 +66,13 @@ export function playbackPage(ctx: PageContext): Page {
       h("span", null, "Frame ", frameOut), h("span", null, clockOut)),
     h("div", { class: "playback-side" }, h("section", { class: "panel" }, h("h2", null, "This frame"), telOut),
       h("section", { class: "panel" }, h("h2", null, "Evidence"), field("Note", note), bmBtn, lockBtn, exportBtn,
-        exportOut, roleHint, marksList))));
+        exportOut, roleHint, marksList)),
+    h("section", { class: "panel" }, h("h2", null, "Tracks in the range (3-D: plan and side views)"),
+      h("div", { class: "track-plots" }, h("div", { class: "plot" }, planEl), h("div", { class: "plot" }, sideEl)))));
+  const plan = new MetricView(planEl, { title: "Plan view", xLabel: "x (m, right)", yLabel: "z (m, ahead)", minSpan: 4,
+    series: [{ label: "trajectories", stroke: "#ffb020" }] });
+  const side = new MetricView(sideEl, { title: "Side view", xLabel: "z (m, ahead)", yLabel: "height (m)", minSpan: 2,
+    series: [{ label: "trajectories", stroke: "#4fd1ff" }] });
 
   let t0 = now - 300, t1 = now, cursor = now - 300;
   let tl = new Timeline([]);
@@ -99,6 +109,7 @@ export function playbackPage(ctx: PageContext): Page {
       tl = new Timeline(segs.filter((s) => s.status !== "open"));
       marks = { tracks, bookmarks: bms, locks };
       showMarks(bms, locks);
+      void trajectories(tracks.slice(0, MAX_TRACKS).map((t) => t.id));
     } catch (e) {
       msg.show(`Recordings could not be loaded: ${why(e)}`, "bad");
       return;
@@ -116,6 +127,21 @@ export function playbackPage(ctx: PageContext): Page {
       return x;
     });
     await showAt(tl.spans[0].start);
+  }
+
+  /** Plan (x, z) and side (z, height) views of the tracks' trajectories, one polyline each. */
+  async function trajectories(ids: number[]): Promise<void> {
+    const tracks = await Promise.all(ids.map((id) => api.track(id).catch(() => null)));
+    const p: XY = [[], []], q: XY = [[], []];
+    for (const t of tracks) {
+      if (!t) continue;
+      for (const pt of t.trajectory) {
+        p[0].push(pt.x); p[1].push(pt.z); q[0].push(pt.z); q[1].push(-pt.y);
+      }
+      p[0].push(null); p[1].push(null); q[0].push(null); q[1].push(null);
+    }
+    plan.setData([p], [], []);
+    side.setData([q], [], []);
   }
 
   function showMarks(bms: Bookmark[], locks: Lock[]): void {
@@ -298,6 +324,8 @@ export function playbackPage(ctx: PageContext): Page {
   return {
     unmount: () => {
       pause();
+      plan.destroy();
+      side.destroy();
       document.removeEventListener("keydown", onKey);
       for (const x of hls) x.destroy();
       for (const c of CAMS) URL.revokeObjectURL(stills[c].src);
