@@ -113,7 +113,8 @@ def run_coverage(seconds: float, probes: int, extra: list[str]) -> dict[str, Any
 def run_kills(kills: int, extra: list[str], seed: int = 0) -> dict[str, Any]:
     rng = random.Random(seed)
     res = {"kills": kills, "restarts_ok": 0, "cut_segments_kept": 0, "rows_missing_file": 0,
-           "segments_not_decoding": 0, "integrity_ok": 0}
+           "segments_not_decoding": 0, "frames_without_telemetry": 0, "integrity_ok": 0}
+    checked: set[int] = set()
     with tempfile.TemporaryDirectory(prefix="tmeye-bench-kill-") as tmp:
         data = Path(tmp)
         for k in range(kills + 1):
@@ -121,12 +122,15 @@ def run_kills(kills: int, extra: list[str], seed: int = 0) -> dict[str, Any]:
             if k:
                 segs = [s for s in http.get("/api/recordings", params={"limit": 100000}).json()
                         if s["status"] != "open"]
-                tel = telemetry_by_pts(http, min(s["start"] for s in segs), max(s["end"] for s in segs))
+                res["rows_missing_file"] += sum(not (data / s["path"]).is_file() for s in segs)
+                fresh = [s for s in segs if s["id"] not in checked]  # written or cut since the last restart
+                tel = telemetry_by_pts(http, min(s["start"] for s in fresh), max(s["end"] for s in fresh))
                 bad = 0
-                for seg in segs:
-                    res["rows_missing_file"] += not (data / seg["path"]).is_file()
+                for seg in fresh:
                     chk = check_segment(http, seg, tel, start_pts_of(seg))
                     bad += chk.error is not None or chk.decoded != seg["frames"]
+                    res["frames_without_telemetry"] += chk.decoded - chk.telemetry_ok
+                    checked.add(seg["id"])
                 res["segments_not_decoding"] += bad
                 res["restarts_ok"] += bad == 0
                 res["cut_segments_kept"] = sum(s["status"] == "cut" for s in segs)
@@ -185,8 +189,10 @@ def worker_cost(seconds: float, rounds: int = 2) -> dict[str, Any]:
 
 
 def run_recording_bench(seconds: float, probes: int, kills: int, cost_s: float, extra: list[str]) -> dict[str, Any]:
+    """seconds 0: no coverage/playback run; cost_s 0: no worker-cost run; kills 0: no SIGKILL run."""
     out: dict[str, Any] = {"seconds": seconds}
-    out["recording"] = run_coverage(seconds, probes, extra)
+    if seconds > 0:
+        out["recording"] = run_coverage(seconds, probes, extra)
     if cost_s > 0:
         out["worker_cost"] = worker_cost(cost_s)
     if kills > 0:
