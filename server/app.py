@@ -106,6 +106,18 @@ def _prepare_db(settings: Settings) -> tuple[AppContext, TrackerTuning, object]:
     return ctx, tuning, rig
 
 
+def _start_recording(ctx: AppContext, rt: Runtime, settings: Settings) -> None:
+    """After the media pipeline: the recorder, the playback frame cache, export jobs and the retention task."""
+    ctx.recorder = Recorder(ctx.media, rt, ctx.sessions, settings.data_dir, recorder_config(settings))
+    ctx.recorder.start()
+    ctx.frames = FrameCache(settings.data_dir)
+    ctx.exports = ExportJobs(ctx.sessions, settings.data_dir)
+    retention = RetentionTask(ctx.sessions, settings.data_dir, retention_policy(settings),
+                              settings.retention_interval_s)
+    ctx.extras["retention"] = retention
+    ctx.extras["retention_task"] = asyncio.create_task(retention.run(), name="retention")
+
+
 def create_app(settings: Settings, runtime: Runtime | None = None) -> FastAPI:
     """The application for `settings`; `runtime` overrides the one built from them (tests)."""
 
@@ -119,17 +131,11 @@ def create_app(settings: Settings, runtime: Runtime | None = None) -> FastAPI:
             ctx.events = EventBus(asyncio.get_running_loop())
             ctx.calibrations = CalibrationJobs(ctx.sessions, settings.data_dir, ctx.events)
             ctx.media = MediaPipeline(rt, MediaConfig(settings.video_bitrate, settings.video_gop, settings.stamp_frames,
-                                                      settings.mjpeg_fps, settings.mjpeg_quality))
+                                                      settings.mjpeg_fps, settings.mjpeg_quality,
+                                                      settings.media_queue))
             ctx.media.start()
             ctx.viewers = Viewers(ctx.media, settings.ice_servers)
-            ctx.recorder = Recorder(ctx.media, rt, ctx.sessions, settings.data_dir, recorder_config(settings))
-            ctx.recorder.start()
-            ctx.frames = FrameCache(settings.data_dir)
-            ctx.exports = ExportJobs(ctx.sessions, settings.data_dir)
-            retention = RetentionTask(ctx.sessions, settings.data_dir, retention_policy(settings),
-                                      settings.retention_interval_s)
-            retention_task = asyncio.create_task(retention.run(), name="retention")
-            ctx.extras["retention"] = retention
+            _start_recording(ctx, rt, settings)
             writer = TrackWriter(rt, ctx.sessions, settings.track_sample_hz, settings.track_flush_s)
             writer_task = asyncio.create_task(writer.run(), name="track-writer")
             monitor_task = asyncio.create_task(ctx.monitor.run(), name="loop-monitor")
@@ -144,8 +150,8 @@ def create_app(settings: Settings, runtime: Runtime | None = None) -> FastAPI:
                 await ctx.viewers.close()
             if "track_writer" in ctx.extras:
                 monitor_task.cancel()
-            if "retention" in ctx.extras:
-                retention_task.cancel()
+            if isinstance(task := ctx.extras.get("retention_task"), asyncio.Task):
+                task.cancel()
             await asyncio.to_thread(rt.stop)
             if ctx.recorder is not None:
                 await asyncio.to_thread(ctx.recorder.stop)
