@@ -69,6 +69,11 @@ async def _captured(base: str, token: str, seconds: float) -> list[tuple[int, fl
     return out
 
 
+def _media_dropped(http: httpx.Client) -> int:
+    subs = http.get("/api/status").json()["subscriptions"]
+    return int(sum(s["dropped"] for s in subs if s["name"] == "media"))
+
+
 def check_recordings(http: httpx.Client, seen: list[tuple[int, float]]) -> dict[str, Any]:
     segs = [s for s in http.get("/api/recordings", params={"limit": 100000}).json() if s["status"] != "open"]
     tel = telemetry_by_pts(http, min(s["start"] for s in segs), max(s["end"] for s in segs))
@@ -94,7 +99,9 @@ def run_coverage(seconds: float, probes: int, extra: list[str]) -> dict[str, Any
         proc, base, http = _serve(Path(tmp), extra)
         try:
             token = http.headers["Authorization"].split()[1]
+            media0 = _media_dropped(http)
             seen = asyncio.run(_captured(base, token, seconds))
+            media1 = _media_dropped(http)
             time.sleep(13.0)  # the last segment holding the window's frames closes
             out = check_recordings(http, seen)
             segs = [s for s in http.get("/api/recordings", params={"limit": 100000}).json() if s["status"] != "open"]
@@ -103,7 +110,10 @@ def run_coverage(seconds: float, probes: int, extra: list[str]) -> dict[str, Any
             frames = [tel[round(t * 90000)]["frame"] for t in times]
             ts = random_times(segs, probes, seed=1)
             out["playback_frame"] = probe_frames(http, "left", ts, times, frames)
-            out["status"] = http.get("/api/status").json()["recording"]
+            st = http.get("/api/status").json()
+            out["status"] = st["recording"]
+            out["media_dropped_in_window"] = media1 - media0  # frames never encoded (overload): not recordable
+            out["skipped_frames"], out["fps"] = st["skipped_frames"], st["fps"]
         finally:
             proc.send_signal(signal.SIGTERM)
             proc.wait(20)
