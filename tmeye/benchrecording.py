@@ -19,6 +19,7 @@ import random
 import signal
 import sqlite3
 import statistics
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -144,6 +145,7 @@ def run_kills(kills: int, extra: list[str], seed: int = 0) -> dict[str, Any]:
                 res["segments_not_decoding"] += bad
                 res["restarts_ok"] += bad == 0
                 res["cut_segments_kept"] = sum(s["status"] == "cut" for s in segs)
+                print(f"restart {k}: {json.dumps(res)}", file=sys.stderr, flush=True)
             if k == kills:
                 proc.send_signal(signal.SIGTERM)
                 proc.wait(20)
