@@ -144,7 +144,7 @@ async def _start_services(stack: contextlib.AsyncExitStack, ctx: AppContext, rt:
     ctx.exports = ExportJobs(ctx.sessions, s.data_dir)
     stack.push_async_callback(asyncio.to_thread, ctx.exports.close)
     ctx.media = MediaPipeline(rt, MediaConfig(s.video_bitrate, s.video_gop, s.stamp_frames, s.mjpeg_fps,
-                                              s.mjpeg_quality))
+                                              s.mjpeg_quality, s.media_queue))
     ctx.media.start()
     stack.push_async_callback(asyncio.to_thread, ctx.media.stop)
     ctx.viewers = Viewers(ctx.media, s.ice_servers)
@@ -163,6 +163,7 @@ async def _start_services(stack: contextlib.AsyncExitStack, ctx: AppContext, rt:
                               run_id=lambda: f"{writer.run_id}.{rt.generation}")
     ctx.alarms.probes["database"] = counter_probe(lambda: writer.errors, "writing tracks failed")
     ctx.alarms.probes["recording"] = lambda: recorder.fault
+    ctx.alarms.on_activated.append(recorder.event)  # in events mode an activation is recorded
     await asyncio.to_thread(ctx.alarms.start)
     stack.push_async_callback(asyncio.to_thread, ctx.alarms.stop)
 

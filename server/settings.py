@@ -56,6 +56,9 @@ class Settings(BaseSettings):
                                                   "carries the frame index in its top-left 16 cells of 8x8 px")
     video_bitrate: int = Field(1_500_000, ge=100_000, le=50_000_000, description="H.264 bits per second per camera")
     video_gop: int = Field(45, ge=1, le=600, description="frames between H.264 keyframes (45: 1.5 s at 30 fps)")
+    media_queue: int = Field(6, ge=1, le=90, description="frames waiting for the H.264 encoders before the oldest "
+                             "is dropped: a short stall of the media thread costs the recording nothing, a "
+                             "long one drops frames (neither shown nor recorded) rather than delaying the video")
     mjpeg_fps: float = Field(15.0, gt=0, le=60, description="MJPEG fallback frames per second")
     mjpeg_quality: int = Field(80, ge=1, le=100, description="MJPEG fallback JPEG quality")
     ice_servers: list[str] = Field(default_factory=list, description="STUN/TURN URLs for WebRTC (none by default)")

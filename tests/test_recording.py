@@ -65,9 +65,17 @@ def captured_frames(server: Server, seconds: float) -> list[tuple[int, float]]:
     return asyncio.run(main())
 
 
+def media_dropped(c: httpx.Client) -> int:
+    """Frames the media thread dropped before encoding (an overloaded machine): never shown nor recorded."""
+    return sum(s["dropped"] for s in c.get("/api/status").json()["subscriptions"] if s["name"] == "media")
+
+
 def test_segments_decode_and_match_telemetry(server: Server) -> None:
+    with server.as_admin() as c:
+        dropped0 = media_dropped(c)
     seen = captured_frames(server, 8.0)  # while recording
     with server.as_admin() as c:
+        dropped = media_dropped(c) - dropped0
         time.sleep(4.0)  # the segments holding those frames close
         segs = closed_segments(c, 4)
         st = c.get("/api/status").json()["recording"]
@@ -87,7 +95,10 @@ def test_segments_decode_and_match_telemetry(server: Server) -> None:
     inside = {f % 65536 for f, t in seen if first <= t <= last}
     assert len(inside) > 60
     cov = coverage(inside, holders)
-    assert cov["left"] >= 0.99 and cov["right"] >= 0.99, cov
+    for cam, cf in holders.items():
+        assert not [f for f, n in cf.counts.items() if n > 1], "a frame in two segments"
+        missing = round((1 - cov[cam]) * len(inside))
+        assert missing <= dropped, (cam, cov, dropped)  # every frame encoded is in exactly one segment
 
 
 def test_playback_frame_is_the_last_frame_at_or_before_t(server: Server) -> None:

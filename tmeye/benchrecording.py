@@ -19,6 +19,7 @@ import random
 import signal
 import sqlite3
 import statistics
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -69,6 +70,11 @@ async def _captured(base: str, token: str, seconds: float) -> list[tuple[int, fl
     return out
 
 
+def _media_dropped(http: httpx.Client) -> int:
+    subs = http.get("/api/status").json()["subscriptions"]
+    return int(sum(s["dropped"] for s in subs if s["name"] == "media"))
+
+
 def check_recordings(http: httpx.Client, seen: list[tuple[int, float]]) -> dict[str, Any]:
     segs = [s for s in http.get("/api/recordings", params={"limit": 100000}).json() if s["status"] != "open"]
     tel = telemetry_by_pts(http, min(s["start"] for s in segs), max(s["end"] for s in segs))
@@ -94,7 +100,9 @@ def run_coverage(seconds: float, probes: int, extra: list[str]) -> dict[str, Any
         proc, base, http = _serve(Path(tmp), extra)
         try:
             token = http.headers["Authorization"].split()[1]
+            media0 = _media_dropped(http)
             seen = asyncio.run(_captured(base, token, seconds))
+            media1 = _media_dropped(http)
             time.sleep(13.0)  # the last segment holding the window's frames closes
             out = check_recordings(http, seen)
             segs = [s for s in http.get("/api/recordings", params={"limit": 100000}).json() if s["status"] != "open"]
@@ -103,7 +111,10 @@ def run_coverage(seconds: float, probes: int, extra: list[str]) -> dict[str, Any
             frames = [tel[round(t * 90000)]["frame"] for t in times]
             ts = random_times(segs, probes, seed=1)
             out["playback_frame"] = probe_frames(http, "left", ts, times, frames)
-            out["status"] = http.get("/api/status").json()["recording"]
+            st = http.get("/api/status").json()
+            out["status"] = st["recording"]
+            out["media_dropped_in_window"] = media1 - media0  # frames never encoded (overload): not recordable
+            out["skipped_frames"], out["fps"] = st["skipped_frames"], st["fps"]
         finally:
             proc.send_signal(signal.SIGTERM)
             proc.wait(20)
@@ -113,7 +124,8 @@ def run_coverage(seconds: float, probes: int, extra: list[str]) -> dict[str, Any
 def run_kills(kills: int, extra: list[str], seed: int = 0) -> dict[str, Any]:
     rng = random.Random(seed)
     res = {"kills": kills, "restarts_ok": 0, "cut_segments_kept": 0, "rows_missing_file": 0,
-           "segments_not_decoding": 0, "integrity_ok": 0}
+           "segments_not_decoding": 0, "frames_without_telemetry": 0, "integrity_ok": 0}
+    checked: set[int] = set()
     with tempfile.TemporaryDirectory(prefix="tmeye-bench-kill-") as tmp:
         data = Path(tmp)
         for k in range(kills + 1):
@@ -121,15 +133,19 @@ def run_kills(kills: int, extra: list[str], seed: int = 0) -> dict[str, Any]:
             if k:
                 segs = [s for s in http.get("/api/recordings", params={"limit": 100000}).json()
                         if s["status"] != "open"]
-                tel = telemetry_by_pts(http, min(s["start"] for s in segs), max(s["end"] for s in segs))
+                res["rows_missing_file"] += sum(not (data / s["path"]).is_file() for s in segs)
+                fresh = [s for s in segs if s["id"] not in checked]  # written or cut since the last restart
+                tel = telemetry_by_pts(http, min(s["start"] for s in fresh), max(s["end"] for s in fresh))
                 bad = 0
-                for seg in segs:
-                    res["rows_missing_file"] += not (data / seg["path"]).is_file()
+                for seg in fresh:
                     chk = check_segment(http, seg, tel, start_pts_of(seg))
                     bad += chk.error is not None or chk.decoded != seg["frames"]
+                    res["frames_without_telemetry"] += chk.decoded - chk.telemetry_ok
+                    checked.add(seg["id"])
                 res["segments_not_decoding"] += bad
                 res["restarts_ok"] += bad == 0
                 res["cut_segments_kept"] = sum(s["status"] == "cut" for s in segs)
+                print(f"restart {k}: {json.dumps(res)}", file=sys.stderr, flush=True)
             if k == kills:
                 proc.send_signal(signal.SIGTERM)
                 proc.wait(20)
@@ -185,8 +201,10 @@ def worker_cost(seconds: float, rounds: int = 2) -> dict[str, Any]:
 
 
 def run_recording_bench(seconds: float, probes: int, kills: int, cost_s: float, extra: list[str]) -> dict[str, Any]:
+    """seconds 0: no coverage/playback run; cost_s 0: no worker-cost run; kills 0: no SIGKILL run."""
     out: dict[str, Any] = {"seconds": seconds}
-    out["recording"] = run_coverage(seconds, probes, extra)
+    if seconds > 0:
+        out["recording"] = run_coverage(seconds, probes, extra)
     if cost_s > 0:
         out["worker_cost"] = worker_cost(cost_s)
     if kills > 0:

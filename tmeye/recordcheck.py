@@ -91,7 +91,7 @@ def probe_frames(http: httpx.Client, camera: str, times: list[float], tel_times:
     (from the recorded telemetry), its stamp must equal X-Frame-Index. Latencies in ms."""
     ok, lat, bad = 0, [], []
     for t in times:
-        i = bisect.bisect_right(tel_times, t + 0.5 / CLOCK_HZ) - 1
+        i = bisect.bisect_right(tel_times, t + 1.5 / CLOCK_HZ) - 1  # the server takes "at or before" within a tick
         want = tel_frames[i] if i >= 0 else None
         t0 = time.perf_counter()
         r = http.get("/api/playback/frame", params={"camera": camera, "t": f"{t:.6f}"})

@@ -247,6 +247,12 @@ class Recorder:
         while len(self._telemetry) > 900:
             self._telemetry.popitem(last=False)
 
+    def event(self, t: float) -> None:
+        """Something worth recording happened at capture time t (Unix s), e.g. an alarm's activation: in
+        events mode the footage from pre-roll before it to post-roll after it is kept (called from any thread)."""
+        last = self.last_event
+        self.last_event = t if last is None else max(last, t)
+
     def _wanted(self, t: float) -> bool:
         if self.fault:
             return False

@@ -97,8 +97,8 @@ def run_recording(args: argparse.Namespace) -> int:
 
     from tmeye.benchrecording import run_recording_bench
 
-    if not 10 <= args.seconds <= 7200:
-        raise UserError(f"--seconds must be 10 to 7200 for --recording, got {args.seconds}")
+    if not (args.seconds == 0 or 10 <= args.seconds <= 7200):
+        raise UserError(f"--seconds must be 0 (no coverage run) or 10 to 7200 for --recording, got {args.seconds}")
     if not 1 <= args.probes <= 10000 or not 0 <= args.kills <= 1000 or not 0 <= args.cost_seconds <= 600:
         raise UserError("--probes must be 1 to 10000, --kills 0 to 1000, --cost-seconds 0 to 600")
     emit(run_recording_bench(args.seconds, args.probes, args.kills, args.cost_seconds, shlex.split(args.serve_args)),

@@ -1,7 +1,7 @@
 """The media thread: frames from the runtime -> one H.264 encoder per camera -> packets for every viewer
 (and the recorder); JPEGs for MJPEG clients, encoded once per frame whatever their number.
 
-It subscribes to the runtime with a queue of 2 (drop-oldest): encoding never slows the tracker, and a
+It subscribes to the runtime with a short queue (drop-oldest, `queue` frames): encoding never slows the tracker, and a
 slow encoder skips frames rather than lagging. Cameras are encoded only while someone consumes them
 (`demand`): a viewer joining asks for a keyframe (`request_keyframe`)."""
 
@@ -28,13 +28,15 @@ CAMERAS = ("left", "right")
 class MediaConfig:
     """bitrate: H.264 bits per second per camera; gop: frames between keyframes; stamp_frames: draw the
     frame index in the top-left corner of the video (never the tracker's input); mjpeg_fps / mjpeg_quality:
-    the MJPEG fallback's rate (frames per second) and JPEG quality (1-100)."""
+    the MJPEG fallback's rate (frames per second) and JPEG quality (1-100); queue: frames waiting for the
+    encoders before the oldest is dropped (a dropped frame is neither shown nor recorded)."""
 
     bitrate: int = 1_500_000
     gop: int = 45
     stamp_frames: bool = False
     mjpeg_fps: float = 15.0
     mjpeg_quality: int = 80
+    queue: int = 2
 
 
 @dataclass(frozen=True)
@@ -81,7 +83,7 @@ class MediaPipeline:
         return self.packets[camera].subscribers > 0 or self.recorders > 0
 
     def _run(self) -> None:
-        sub = self.runtime.hub.subscribe(maxsize=2, name="media")
+        sub = self.runtime.hub.subscribe(maxsize=self.config.queue, name="media")
         try:
             while not self._stop.is_set():
                 ev = sub.get(timeout=0.2)

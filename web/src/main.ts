@@ -21,7 +21,7 @@ interface Route {
 
 const ROUTES: Route[] = [
   { name: "live", label: "Live", load: () => import("./pages/live").then((m) => m.livePage) },
-  { name: "playback", label: "Playback", soon: "Playback of recorded video comes with its own issue." },
+  { name: "playback", label: "Playback", load: () => import("./pages/playback").then((m) => m.playbackPage) },
   { name: "tracks", label: "Tracks", load: () => import("./pages/tracks").then((m) => m.tracksPage) },
   { name: "alarms", label: "Alarms", load: () => import("./pages/alarms").then((m) => m.alarmsPage) },
   { name: "calibration", label: "Calibration", load: () => import("./pages/calibration").then((m) => m.calibrationPage) },

@@ -1933,6 +1933,12 @@ export interface components {
             frames_processed: number;
             /** Frame Errors */
             frame_errors: number;
+            /**
+             * Source Faults
+             * @description source faults (a read that failed or stalled) since the start
+             * @default 0
+             */
+            source_faults: number;
             /** Source */
             source: {
                 [key: string]: unknown;
