@@ -115,3 +115,18 @@ def test_playback_steps_plays_seeks_and_exports(server: Server, chromium: Any) -
     assert err is None and len(stamps) > 30 and {s for _, s in stamps} <= {f % 65536 for f in frames}
     screenshot(page, "playback-export")
     page.context.close()
+
+
+def test_a_link_with_a_time_opens_playback_at_that_frame(server: Server, chromium: Any) -> None:
+    """An alarm's playback link (#/playback?t=T) shows the frame captured at or before T, T inside the range."""
+    with server.as_admin() as c:
+        tel = c.get("/api/telemetry", params={"start": 0, "end": time.time() + 60, "limit": 200000}).json()
+    want = tel[len(tel) * 3 // 8]  # a frame of a closed segment
+    page = new_page(chromium, server)
+    login(page, *user(server, "paula", "viewer"))
+    page.goto(f"/#/playback?t={want['captured_at'] + 0.001:.3f}")
+    page.get_by_role("heading", name="Playback").wait_for()
+    index = page.get_by_test_id("frame-index")
+    wait_for(lambda: (index.text_content() or "").isdigit(), 30, what="a frame shown")
+    assert int(index.text_content() or "-1") == want["frame"]
+    page.context.close()

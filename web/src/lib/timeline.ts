@@ -55,7 +55,12 @@ export interface Marks {
   tracks: { first_seen: number; last_seen: number }[];
   bookmarks: { t: number }[];
   locks: { start: number; end: number }[];
+  /** alarms: from activation to clearing (open ones to the range's end), coloured by priority */
+  alarms: { activated_at: number; cleared_at: number | null; priority: string }[];
 }
+
+const PRIORITY_COLOUR: Record<string, string> = { critical: "#ff4d4d", high: "#ffb020", medium: "#c9a0ff",
+  low: "#8fa3b8" };
 
 /** Draw the strip for [t0, t1] with the cursor at `at` (all Unix s). */
 export function drawStrip(c: HTMLCanvasElement, tl: Timeline, t0: number, t1: number, at: number, m: Marks): void {
@@ -71,6 +76,12 @@ export function drawStrip(c: HTMLCanvasElement, tl: Timeline, t0: number, t1: nu
   for (const t of m.tracks) g.fillRect(x(t.first_seen), 0, Math.max(x(t.last_seen) - x(t.first_seen), 2), hgt * 0.2);
   g.fillStyle = "rgba(79,209,255,0.35)";
   for (const l of m.locks) g.fillRect(x(l.start), hgt * 0.75, Math.max(x(l.end) - x(l.start), 2), hgt * 0.25);
+  for (const a of m.alarms) {
+    g.fillStyle = PRIORITY_COLOUR[a.priority] ?? "#ff4d4d";
+    const end = a.cleared_at ?? t1;
+    g.fillRect(x(a.activated_at), hgt * 0.2, Math.max(x(end) - x(a.activated_at), 2), hgt * 0.1);
+    g.fillRect(x(a.activated_at) - devicePixelRatio, 0, 2 * devicePixelRatio, hgt * 0.3);
+  }
   g.fillStyle = "#e14eca";
   for (const b of m.bookmarks) g.fillRect(x(b.t) - 1, 0, 3 * devicePixelRatio, hgt);
   g.fillStyle = "#ffffff";

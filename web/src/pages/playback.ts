@@ -76,7 +76,15 @@ export function playbackPage(ctx: PageContext): Page {
 
   let t0 = now - 300, t1 = now, cursor = now - 300;
   let tl = new Timeline([]);
-  let marks: Marks = { tracks: [], bookmarks: [], locks: [] };
+  let marks: Marks = { tracks: [], bookmarks: [], locks: [], alarms: [] };
+  // #/playback?t=T (an alarm's link): the range around T, shown at T
+  const asked = Number(ctx.query.get("t") ?? NaN);
+  const at = Number.isFinite(asked) && asked > 0 ? asked : null;
+  if (at !== null) {
+    range.value = "custom";
+    from.value = toLocalInput(at - 60);
+    to.value = toLocalInput(Math.min(at + 120, Date.now() / 1000 + 1));
+  }
   let hls: Hls[] = [];
   let tel: FrameTelemetry[] = [];
   let shown: FrameTelemetry | null = null;
@@ -104,10 +112,11 @@ export function playbackPage(ctx: PageContext): Page {
     t1 = fromLocalInput(to.value) ?? Date.now() / 1000;
     msg.show("Loading…");
     try {
-      const [segs, tracks, bms, locks] = await Promise.all([rec.segments("left", t0, t1), rec.tracks(t0, t1),
-        rec.bookmarks(t0, t1), rec.locks(t0, t1)]);
+      const [segs, tracks, bms, locks, alarms] = await Promise.all([rec.segments("left", t0, t1), rec.tracks(t0, t1),
+        rec.bookmarks(t0, t1), rec.locks(t0, t1), api.alarms(undefined, t0 - 86400, 1000).catch(() => [])]);
       tl = new Timeline(segs.filter((s) => s.status !== "open"));
-      marks = { tracks, bookmarks: bms, locks };
+      marks = { tracks, bookmarks: bms, locks,
+        alarms: alarms.filter((a) => a.activated_at <= t1 && (a.cleared_at ?? t1) >= t0) };
       showMarks(bms, locks);
       void trajectories(tracks.slice(0, MAX_TRACKS).map((t) => t.id));
     } catch (e) {
@@ -126,7 +135,8 @@ export function playbackPage(ctx: PageContext): Page {
       x.attachMedia(videos[c]);
       return x;
     });
-    await showAt(tl.spans[0].start);
+    const first = tl.spans[0].start;
+    await showAt(at !== null && at >= first ? at : first);
   }
 
   /** Plan (x, z) and side (z, height) views of the tracks' trajectories, one polyline each. */
