@@ -15,7 +15,6 @@ from typing import Any
 
 import httpx
 import pytest
-import websockets
 from server_helpers import Server, start_server
 
 from tmeye.media.encoder import CLOCK_HZ
@@ -29,6 +28,7 @@ from tmeye.recordcheck import (
     start_pts_of,
     telemetry_by_pts,
 )
+from tmeye.webrtc_client import telemetry_messages
 
 
 @pytest.fixture(scope="module")
@@ -50,19 +50,7 @@ def closed_segments(c: httpx.Client, n: int, timeout: float = 60.0, **params: An
 
 def captured_frames(server: Server, seconds: float) -> list[tuple[int, float]]:
     """(frame, captured_at) of every telemetry message over `seconds`."""
-    async def main() -> list[tuple[int, float]]:
-        out = []
-        url = server.url.replace("http://", "ws://") + "/ws/telemetry"
-        async with websockets.connect(url, additional_headers={"Authorization": f"Bearer {server.login()}"}) as ws:
-            end = time.monotonic() + seconds
-            while (left := end - time.monotonic()) > 0:
-                try:
-                    m = json.loads(await asyncio.wait_for(ws.recv(), left))
-                except TimeoutError:
-                    break
-                out.append((int(m["frame"]), float(m["captured_at"])))
-        return out
-    return asyncio.run(main())
+    return asyncio.run(telemetry_messages(server.url, server.login(), seconds))
 
 
 def media_dropped(c: httpx.Client) -> int:

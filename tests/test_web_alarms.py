@@ -10,7 +10,7 @@ from typing import Any
 
 import pytest
 from server_helpers import Server, start_server
-from web_helpers import admin, browser, login, new_page, require_browser, screenshot, skip_reason, user, wait_for
+from web_helpers import admin, login, new_page, require_browser, screenshot, skip_reason, user, wait_for
 
 pytestmark = pytest.mark.skipif(skip_reason() is not None, reason=skip_reason() or "")
 
@@ -39,13 +39,6 @@ def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
     s = start_server(tmp_path_factory.mktemp("web-alarms") / "data")
     yield s
     s.stop()
-
-
-@pytest.fixture(scope="module")
-def chromium() -> Iterator[Any]:
-    require_browser()
-    with browser() as b:
-        yield b
 
 
 def test_banner_ack_across_consoles_and_zones(server: Server, chromium: Any) -> None:

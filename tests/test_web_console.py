@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 import pytest
 from server_helpers import Server, start_server
-from web_helpers import admin, browser, debug, login, new_page, require_browser, screenshot, skip_reason, user, wait_for
+from web_helpers import admin, debug, login, new_page, require_browser, screenshot, skip_reason, user, wait_for
 
 pytestmark = pytest.mark.skipif(skip_reason() is not None, reason=skip_reason() or "")
 
@@ -22,13 +22,6 @@ def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
     s = start_server(tmp_path_factory.mktemp("web") / "data")
     yield s
     s.stop()
-
-
-@pytest.fixture(scope="module")
-def chromium() -> Iterator[Any]:
-    require_browser()
-    with browser() as b:
-        yield b
 
 
 @pytest.fixture

@@ -14,7 +14,7 @@ from typing import Any
 import httpx
 import pytest
 from server_helpers import Server, start_server
-from web_helpers import browser, login, new_page, require_browser, screenshot, skip_reason, user, wait_for
+from web_helpers import login, new_page, require_browser, screenshot, skip_reason, user, wait_for
 
 from tmeye.recordcheck import decode_stamps
 
@@ -38,13 +38,6 @@ def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
         yield s
     finally:
         s.stop()
-
-
-@pytest.fixture(scope="module")
-def chromium() -> Iterator[Any]:
-    require_browser()
-    with browser() as b:
-        yield b
 
 
 def shown(page: Any) -> tuple[int, int | None, int | None]:

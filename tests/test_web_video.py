@@ -14,7 +14,6 @@ import pytest
 from server_helpers import Server, start_server
 from web_helpers import (
     admin,
-    browser,
     debug,
     login,
     new_page,
@@ -39,13 +38,6 @@ def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
         yield s
     finally:
         s.stop()
-
-
-@pytest.fixture(scope="module")
-def chromium() -> Iterator[Any]:
-    require_browser()
-    with browser() as b:
-        yield b
 
 
 @pytest.fixture

@@ -27,7 +27,7 @@ from typing import Any
 
 import httpx
 
-from tmeye.benchserver import _start
+from tmeye.benchserver import serve_ready
 from tmeye.recordcheck import (
     CameraFrames,
     check_segment,
@@ -37,37 +37,12 @@ from tmeye.recordcheck import (
     start_pts_of,
     telemetry_by_pts,
 )
+from tmeye.webrtc_client import telemetry_messages
 
 
 def _serve(data: Path, extra: list[str]) -> tuple[Any, str, httpx.Client]:
-    proc, base = _start(data, ["--stamp-frames", *extra])
-    deadline = time.monotonic() + 180
-    while time.monotonic() < deadline:
-        try:
-            if httpx.get(f"{base}/api/health", timeout=2).json()["status"] == "ok":
-                break
-        except httpx.HTTPError:
-            pass
-        time.sleep(0.2)
-    pw = (data / "initial-admin-password").read_text().strip()
-    token = httpx.post(f"{base}/api/auth/login", data={"username": "admin", "password": pw}).json()["access_token"]
+    proc, base, token = serve_ready(data, ["--stamp-frames", *extra])
     return proc, base, httpx.Client(base_url=base, headers={"Authorization": f"Bearer {token}"}, timeout=60)
-
-
-async def _captured(base: str, token: str, seconds: float) -> list[tuple[int, float]]:
-    import websockets
-
-    out = []
-    async with websockets.connect(base.replace("http://", "ws://") + "/ws/telemetry",
-                                  additional_headers={"Authorization": f"Bearer {token}"}, max_queue=None) as ws:
-        end = time.monotonic() + seconds
-        while (left := end - time.monotonic()) > 0:
-            try:
-                m = json.loads(await asyncio.wait_for(ws.recv(), left))
-            except TimeoutError:
-                break
-            out.append((int(m["frame"]), float(m["captured_at"])))
-    return out
 
 
 def _media_dropped(http: httpx.Client) -> int:
@@ -101,7 +76,7 @@ def run_coverage(seconds: float, probes: int, extra: list[str]) -> dict[str, Any
         try:
             token = http.headers["Authorization"].split()[1]
             media0 = _media_dropped(http)
-            seen = asyncio.run(_captured(base, token, seconds))
+            seen = asyncio.run(telemetry_messages(base, token, seconds))
             media1 = _media_dropped(http)
             time.sleep(13.0)  # the last segment holding the window's frames closes
             out = check_recordings(http, seen)

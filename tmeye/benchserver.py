@@ -88,26 +88,30 @@ async def _measure(base: str, token: str, clients: int, seconds: float, warmup: 
     return {"clients": results, "status_before": s0, "status_after": s1}
 
 
+def serve_ready(data: Path, extra: list[str]) -> tuple[subprocess.Popen[str], str, str]:
+    """`tmeye serve` on `data` until /api/health says ok: (process, base URL, admin token)."""
+    import httpx
+
+    proc, base = _start(data, extra)
+    deadline = time.monotonic() + 180
+    while time.monotonic() < deadline:
+        try:
+            if httpx.get(f"{base}/api/health", timeout=2).json()["status"] == "ok":
+                break
+        except httpx.HTTPError:
+            pass
+        time.sleep(0.2)
+    pw = (data / "initial-admin-password").read_text().strip()
+    token = httpx.post(f"{base}/api/auth/login", data={"username": "admin", "password": pw}).json()["access_token"]
+    return proc, base, token
+
+
 @contextlib.contextmanager
 def served(extra: list[str]) -> Iterator[tuple[int, str, str]]:
     """A `tmeye serve` in a temporary data directory: (pid, base URL, admin token); stopped on exit."""
-    import httpx
-
     with tempfile.TemporaryDirectory(prefix="tmeye-bench-") as tmp:
-        data = Path(tmp)
-        proc, base = _start(data, extra)
+        proc, base, token = serve_ready(Path(tmp), extra)
         try:
-            deadline = time.monotonic() + 180
-            while time.monotonic() < deadline:
-                try:
-                    if httpx.get(f"{base}/api/health", timeout=2).json()["status"] == "ok":
-                        break
-                except httpx.HTTPError:
-                    pass
-                time.sleep(0.2)
-            pw = (data / "initial-admin-password").read_text().strip()
-            token = httpx.post(f"{base}/api/auth/login", data={"username": "admin", "password": pw}).json()[
-                "access_token"]
             yield proc.pid, base, token
         finally:
             proc.send_signal(signal.SIGTERM)

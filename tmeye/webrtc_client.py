@@ -62,13 +62,13 @@ async def view(base_url: str, token: str, seconds: float, read_stamps: bool = Tr
     return recs
 
 
-async def telemetry_times(base_url: str, token: str, seconds: float) -> dict[int, float]:
-    """frame number mod 65536 -> captured_at (Unix s), from /ws/telemetry over `seconds`."""
+async def telemetry_messages(base_url: str, token: str, seconds: float) -> list[tuple[int, float]]:
+    """(frame number, captured_at Unix s) of every /ws/telemetry message over `seconds`."""
     import json
 
     import websockets
 
-    out: dict[int, float] = {}
+    out: list[tuple[int, float]] = []
     url = base_url.replace("http://", "ws://") + "/ws/telemetry"
     async with websockets.connect(url, additional_headers={"Authorization": f"Bearer {token}"},
                                   max_queue=None) as ws:
@@ -78,8 +78,13 @@ async def telemetry_times(base_url: str, token: str, seconds: float) -> dict[int
                 m = json.loads(await asyncio.wait_for(ws.recv(), left))
             except TimeoutError:
                 break
-            out[int(m["frame"]) % 65536] = float(m["captured_at"])
+            out.append((int(m["frame"]), float(m["captured_at"])))
     return out
+
+
+async def telemetry_times(base_url: str, token: str, seconds: float) -> dict[int, float]:
+    """frame number mod 65536 -> captured_at (Unix s), from /ws/telemetry over `seconds`."""
+    return {f % 65536: t for f, t in await telemetry_messages(base_url, token, seconds)}
 
 
 def latency_ms(rec: Received, captured: dict[int, float]) -> list[float]:
