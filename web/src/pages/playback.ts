@@ -83,7 +83,8 @@ export function playbackPage(ctx: PageContext): Page {
   if (at !== null) {
     range.value = "custom";
     from.value = toLocalInput(at - 60);
-    to.value = toLocalInput(Math.min(at + 120, Date.now() / 1000 + 1));
+    // the inputs hold whole minutes: end a minute later than wanted, or leave it empty (now) if that is to come
+    to.value = at + 180 < Date.now() / 1000 ? toLocalInput(at + 180) : "";
   }
   let hls: Hls[] = [];
   let tel: FrameTelemetry[] = [];
