@@ -20,6 +20,7 @@ def test_two_minute_soak_serves_every_client_throughout() -> None:
     s = report["summary"]
     print(json.dumps(s))
     assert s["states"] == ["running"] and s["rest_errors"] == [] and s["rest_requests"] > 100
+    assert s["status_errors"] == 0
     assert len(report["samples"]) == 12
     rec = s["recording"]  # recording on (the default): segments closed, no fault
     assert rec is not None and rec["segments"] >= 4 and rec["fault"] is None and rec["errors"] == 0

@@ -42,8 +42,8 @@ def end_with_parent() -> None:
 
 def _start(data: Path, extra: list[str]) -> tuple[subprocess.Popen[str], str]:
     proc = subprocess.Popen([sys.executable, "-m", "tmeye", "serve", "--port", "0", "--data-dir", str(data),
-                             "--log-level", "warning", *extra], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
-                            text=True, preexec_fn=end_with_parent)
+                             "--log-level", "warning", *extra], stdout=subprocess.PIPE,
+                            stderr=(data / "server.log").open("a"), text=True, preexec_fn=end_with_parent)
     assert proc.stdout is not None
     m = re.search(r"(http://[\d.]+:\d+)/", proc.stdout.readline())
     if not m:
@@ -116,6 +116,9 @@ def served(extra: list[str]) -> Iterator[tuple[int, str, str]]:
         finally:
             proc.send_signal(signal.SIGTERM)
             proc.wait(15)
+            log = (Path(tmp) / "server.log").read_text(errors="replace")
+            if (i := log.find("Traceback")) >= 0:  # the server's errors outlive its temporary directory
+                print(f"the server logged errors; the first:\n{log[max(i - 200, 0):i + 4000]}", file=sys.stderr)
 
 
 def run_server_bench(seconds: float, clients: int, warmup: float, extra: list[str]) -> dict[str, Any]:

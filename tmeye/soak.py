@@ -76,10 +76,14 @@ async def _webrtc_client(base: str, token: str, seconds: float, load: Load, k: i
 
 
 async def _sampler(http: Any, pid: int, t0: float, until: float, every: float, out: list[dict[str, Any]]) -> None:
-    last: dict[str, Any] | None = None
+    last: dict[str, Any] | None = None  # the last good sample
     while (left := until - time.monotonic()) > 0:
         await asyncio.sleep(min(every, left))
-        st = (await http.get("/api/status", params={"window_s": every})).json()
+        r = await http.get("/api/status", params={"window_s": every})
+        if r.status_code != 200:  # counted by the REST client's figures too; the next sample tries again
+            out.append({"t_s": round(time.monotonic() - t0, 1), "error": f"/api/status: {r.status_code}"})
+            continue
+        st = r.json()
         row = {"t_s": round(time.monotonic() - t0, 1), **proc_figures(pid), "frame": st["frame"],
                "skipped_frames": st["skipped_frames"], "loop_lag_p99_ms": st["event_loop_lag_ms"].get("p99"),
                "frame_gap_max_ms": st.get("frame_gap_max_ms"), "state": st["state"],
@@ -118,7 +122,9 @@ async def _soak(pid: int, base: str, token: str, seconds: float, webrtc: int, ws
 
 
 def summarise(samples: list[dict[str, Any]], load: Load, seconds: float) -> dict[str, Any]:
-    """The figures the soak goals are judged by."""
+    """The figures the soak goals are judged by (status errors are counted, their rows left out)."""
+    failed = [s for s in samples if "error" in s]
+    samples = [s for s in samples if "error" not in s]
     settle = min(SETTLE_S, seconds / 2)
     after = [s for s in samples if s["t_s"] >= settle] or samples[-1:]
     rss0, rss1 = after[0]["rss_mb"], samples[-1]["rss_mb"]
@@ -141,6 +147,7 @@ def summarise(samples: list[dict[str, Any]], load: Load, seconds: float) -> dict
         "webrtc_frames_per_s": [round(n / (seconds + GRACE_S) / 2, 1) for n in load.webrtc_frames],  # per camera
         "rest_requests": load.rest_requests, "rest_errors": load.rest_errors[:20],
         "states": sorted({s["state"] for s in samples}),
+        "status_errors": len(failed),
         "recording": samples[-1].get("recording"),
     }
 
@@ -151,6 +158,6 @@ def run_soak(minutes: float, webrtc: int, ws: int, every: float, extra: list[str
     seconds = minutes * 60.0
     with served(extra) as (pid, base, token):
         load, samples = asyncio.run(_soak(pid, base, token, seconds, webrtc, ws, every))
-    if not samples:
-        raise RuntimeError("no sample was taken (run longer than one sampling interval)")
+    if not any("error" not in s for s in samples):
+        raise RuntimeError("no sample was taken (run longer than one sampling interval, or the status failed)")
     return {"summary": summarise(samples, load, seconds), "samples": samples}

@@ -39,6 +39,9 @@ def run(args: argparse.Namespace) -> int:
         print(f"{k:38s}{v}")
     print("\n" + " ".join(f"{k:>10s}" for k in ("t_s", "rss_mb", "fds", "threads", "gap_ms", "lag_p99", "skipped")))
     for s in report["samples"]:
+        if "error" in s:
+            print(f"{s['t_s']:>10} {s['error']}")
+            continue
         vals = (s["t_s"], s["rss_mb"], s["fds"], s["threads"], s["frame_gap_max_ms"], s["loop_lag_p99_ms"],
                 s["skipped_in_interval"])
         print(" ".join(f"{'-' if v is None else v:>10}" for v in vals))
