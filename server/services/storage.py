@@ -30,8 +30,8 @@ def apply_retention(sessions: sessionmaker[Session], data_dir: Path, policy: Pol
         return []
     with sessions() as db, db.begin():
         gone = list(db.scalars(select(Segment).where(Segment.id.in_(ids))))
+        paths = [data_dir / seg.path for seg in gone]
         for seg in gone:
-            (data_dir / seg.path).unlink(missing_ok=True)
             db.delete(seg)
         db.flush()
         for seg in gone:
@@ -39,6 +39,10 @@ def apply_retention(sessions: sessionmaker[Session], data_dir: Path, policy: Pol
                                   Segment.end >= RecordedFrame.captured_at)
             db.execute(delete(RecordedFrame).where(RecordedFrame.captured_at >= seg.start,
                                                    RecordedFrame.captured_at <= (seg.end or seg.start), ~held))
+    # the rows go first: no reader ever sees a row whose file is gone; a file left by a crash here is
+    # removed by the start-up reconciliation (files without rows)
+    for path in paths:
+        path.unlink(missing_ok=True)
     log.info("retention deleted %d segments", len(ids))
     return ids
 
