@@ -56,7 +56,8 @@ def feed(media: Media, runtime: Any, frames: int, events: set[int] = EVENTS,
         time.sleep(1 / 120)
 
 
-def test_events_mode_records_pre_and_post_roll_only(tmp_path: Path) -> None:
+def events_recorder(tmp_path: Path) -> tuple[Media, Any, Any, Recorder]:
+    """A started recorder in events mode (2 s pre- and post-roll) on a migrated database in tmp_path."""
     url = f"sqlite:///{tmp_path}/tmeye.db"
     upgrade(url)
     sessions = session_factory(make_engine(url))
@@ -64,6 +65,11 @@ def test_events_mode_records_pre_and_post_roll_only(tmp_path: Path) -> None:
     rec = Recorder(media, runtime, sessions, tmp_path,  # type: ignore[arg-type]
                    RecorderConfig(mode="events", segment_s=10.0, preroll_s=2.0, postroll_s=2.0, min_free_mb=0))
     rec.start()
+    return media, runtime, sessions, rec
+
+
+def test_events_mode_records_pre_and_post_roll_only(tmp_path: Path) -> None:
+    media, runtime, sessions, rec = events_recorder(tmp_path)
     assert media.recorders == 1
     feed(media, runtime, 520)
     time.sleep(0.5)
@@ -90,13 +96,7 @@ def test_events_mode_records_pre_and_post_roll_only(tmp_path: Path) -> None:
 def test_an_alarm_activation_is_recorded_in_events_mode(tmp_path: Path) -> None:
     """No detection at all: the activation (Recorder.event, what the alarm service calls) alone keeps the
     pre-roll before it and the post-roll after it."""
-    url = f"sqlite:///{tmp_path}/tmeye.db"
-    upgrade(url)
-    sessions = session_factory(make_engine(url))
-    media, runtime = Media(), SimpleNamespace(hub=Hub())
-    rec = Recorder(media, runtime, sessions, tmp_path,  # type: ignore[arg-type]
-                   RecorderConfig(mode="events", segment_s=10.0, preroll_s=2.0, postroll_s=2.0, min_free_mb=0))
-    rec.start()
+    media, runtime, sessions, rec = events_recorder(tmp_path)
     feed(media, runtime, 420, events=set(), hook=lambda i, t: rec.event(t) if i == 300 else None)
     time.sleep(0.5)
     rec.stop()
