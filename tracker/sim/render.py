@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 from tracker.frames import GimbalState, StereoFrame
 from tracker.geometry import Camera, StereoRig, gimbal_rotation
 from tracker.sim.scene import Surface
-from tracker.sim.static_cast import StaticScene
+from tracker.sim.static_cast import StaticScene, _Plan
 
 F64 = NDArray[np.float64]
 F32 = NDArray[np.float32]
@@ -187,10 +187,10 @@ def cast_surface_exact(view: _View, R_wr: F64, s: Surface, t: float, img: F32 | 
 class SimRenderer:
     """Renders stereo pairs of a scene for given gimbal angles. Not thread-safe; one per worker.
 
-    The two cameras are rendered concurrently (camera 1 on a helper thread, camera 0 on the caller's):
-    OpenCV and numpy release the GIL over whole images, so a pair takes little more than one camera on
-    two cores. Random draws are made on the caller's thread, in camera order, so frames do not depend on
-    the threads' timing."""
+    The two cameras are rendered concurrently (camera 0 on a helper thread, camera 1 on the caller's),
+    except the planning of the static scene (StaticScene.plan: many small numpy steps that hold the GIL),
+    done for both on the caller's thread while camera 0 is drawn. Random draws are made on the caller's
+    thread, in camera order, so frames do not depend on the threads' timing."""
 
     def __init__(self, rig: StereoRig, static: list[Surface], seed: int, noise_sigma: float = 1.2):
         self.rig = rig
@@ -212,24 +212,29 @@ class SimRenderer:
         n = np.round(rng.standard_normal((h + 64, w)) * sigma).clip(-60, 60)
         return np.maximum(n, 0).astype(np.uint8), np.maximum(-n, 0).astype(np.uint8)
 
-    def _both(self, fn: Callable[[int], _T]) -> tuple[_T, _T]:
-        """fn(0) on this thread and fn(1) on the helper thread, concurrently."""
+    def _both(self, fn: Callable[[int, _Plan | None], _T], R_wr: F64 | None) -> tuple[_T, _T]:
+        """(fn(0, plan 0), fn(1, plan 1)), camera 0's on the helper thread: both plans are made on this
+        thread (small numpy steps holding the GIL), camera 0's draw overlapping camera 1's plan. Two whole
+        renders on two threads instead fight over the GIL at every step. R_wr None: no static render, the
+        plans are None."""
         if self._pool is None:
             self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="sim-render")
-        second = self._pool.submit(fn, 1)
+        plan0 = self._scene.plan(0, R_wr) if R_wr is not None else None
+        first = self._pool.submit(fn, 0, plan0)
         try:
-            first = fn(0)
+            second = fn(1, self._scene.plan(1, R_wr) if R_wr is not None else None)
         finally:
-            out = second.result()
-        return first, out
+            out = first.result()
+        return out, second
 
-    def _static_camera(self, k: int, R_wr: F64) -> tuple[U8, F32]:
-        """Camera k's static image (H, W) uint8 and inverse distances 1/z (1/m), (H, W) float32."""
-        view = self.views[k]
-        img, inv_z, rest = self._scene.render(k, R_wr)
-        if rest:  # what the static renderer cannot take (discs, swaying, too near), cast per pixel
+    def _static_camera(self, plan: _Plan, R_wr: F64) -> tuple[U8, F32]:
+        """A camera's static image (H, W) uint8 and inverse distances 1/z (1/m), (H, W) float32, drawn from
+        its plan."""
+        view = self.views[plan.k]
+        img, inv_z = self._scene.draw(plan)
+        if plan.rest:  # what the static renderer cannot take (discs, swaying, too near), cast per pixel
             depth = view.ray_len / inv_z
-            for surface in rest:
+            for surface in plan.rest:
                 _cast_plane_fast(view, R_wr, surface, img, depth)
             inv_z = view.ray_len / depth
         return img, inv_z
@@ -243,7 +248,12 @@ class SimRenderer:
         if hit is not None:
             return hit
         R_wr = gimbal_rotation(gimbal.pan_deg, gimbal.tilt_deg)
-        pair = self._both(lambda k: self._static_camera(k, R_wr))
+
+        def static(_k: int, plan: _Plan | None) -> tuple[U8, F32]:
+            assert plan is not None  # planned: R_wr is given
+            return self._static_camera(plan, R_wr)
+
+        pair = self._both(static, R_wr)
         self._remember(key, ([p[0] for p in pair], [p[1] for p in pair]))
         return self._cache[key]
 
@@ -267,8 +277,12 @@ class SimRenderer:
         R_wr = gimbal_rotation(gimbal.pan_deg, gimbal.tilt_deg)
         offsets = [int(self._rng.integers(0, 64)) if noisy else 0 for _ in range(2)]
 
-        def camera(k: int) -> tuple[U8, U8, U8, F32]:
-            base_img, base_inv = (cached[0][k], cached[1][k]) if cached else self._static_camera(k, R_wr)
+        def camera(k: int, plan: _Plan | None) -> tuple[U8, U8, U8, F32]:
+            if plan is not None:
+                base_img, base_inv = self._static_camera(plan, R_wr)
+            else:
+                assert cached is not None  # not planned: the pose's static render is cached
+                base_img, base_inv = cached[0][k], cached[1][k]
             img8 = base_img.copy()
             ids = np.zeros(img8.shape, np.uint8)
             if moving:
@@ -281,7 +295,7 @@ class SimRenderer:
                 img8 = np.asarray(cv2.subtract(cv2.add(img8, pos[o:o + h]), neg[63 - o:63 - o + h]), np.uint8)
             return img8, ids, base_img, base_inv
 
-        left, right = self._both(camera)
+        left, right = self._both(camera, None if cached else R_wr)
         if cached is None:
             self._remember(key, ([left[2], right[2]], [left[3], right[3]]))
         frame = StereoFrame(index, left[0], right[0], t, t, gimbal)

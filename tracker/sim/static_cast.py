@@ -313,6 +313,19 @@ def _node_values(grid: _Grid, node: NDArray[np.int16], H: F64) -> F32:
     return out
 
 
+@dataclass(frozen=True)
+class _Plan:
+    """Camera k's sparse render: (X, Y, W) at the nodes (3, ny, nx) float32 (None: every plane is within
+    0.1 m of the camera, nothing drawn), and at the padded pixels idx (N,) cast one by one, (3, N); and the
+    surfaces left to the caller (off the atlas, or planes within 0.1 m of the camera), in scene order."""
+
+    k: int
+    nodes: F32 | None
+    idx: I64
+    vals: F32
+    rest: list[Surface]
+
+
 class StaticScene:
     """The static surfaces of a scene, rendered exactly for each of a rig's cameras at any gimbal pose."""
 
@@ -329,15 +342,23 @@ class StaticScene:
         """Camera k's image (H, W) uint8 and the inverse 1/z of each pixel's distance z (m) along the
         camera's axis to the scene, (H, W) float32 (about 1e-30 where nothing is hit; the distance along the
         ray is |m| z), at gimbal rotation R_wr (world <- rig); and the surfaces left to the caller to cast
-        per pixel over them, in scene order (those this cannot render)."""
+        per pixel over them, in scene order (those this cannot render). plan() then draw()."""
+        plan = self.plan(k, R_wr)
+        img, W = self.draw(plan)
+        return img, W, plan.rest
+
+    def plan(self, k: int, R_wr: F64) -> _Plan:
+        """The sparse part of camera k's image at R_wr: which surface each cell sees, (X, Y, W) at the nodes
+        and at the pixels cast one by one. Many small numpy steps that hold the GIL most of the time: run
+        the planning of both cameras on one thread and overlap it with draw(), which is a few large OpenCV
+        calls that release it."""
         cam, grid, p = self.cams[k], self._grids[k], self._planes
-        w, h = cam.size
         H, q = _plane_rows(cam, R_wr, p)
         near = np.abs(q) < 0.1  # then every hit is over 0.1 m away, as the reference requires (> 0.05 m)
         too_near = {id(s) for s, n in zip(self._fast, near, strict=True) if n}
         rest = [s for s in self.surfaces if id(s) not in self._fast_ids or id(s) in too_near]
         if near.all():
-            return np.zeros((h, w), np.uint8), np.full((h, w), _NO_HIT[2], np.float32), rest
+            return _Plan(k, None, np.zeros(0, np.int64), np.zeros((3, 0), np.float32), rest)
         centre, half = p.centre, p.half
         if near.any():
             H, centre, half = H[~near], centre[~near], half[~near]
@@ -354,14 +375,23 @@ class StaticScene:
             idx = np.concatenate([idx, extra])
             vals = np.hstack([vals, _surface_values(H, np.repeat(cell[more], STEP * STEP),
                                                     grid.xy_pad[0][extra], grid.xy_pad[1][extra])])
-        nodes = _node_values(grid, node, H)
+        return _Plan(k, _node_values(grid, node, H), idx, vals, rest)
+
+    def draw(self, plan: _Plan) -> tuple[U8, F32]:
+        """A plan's image (H, W) uint8 and inverse distances 1/z (H, W) float32: the node values
+        interpolated (one cv2.resize), the pixels cast one by one put in, divided by W and textured (one
+        cv2.remap)."""
+        cam, grid = self.cams[plan.k], self._grids[plan.k]
+        w, h = cam.size
+        if plan.nodes is None:
+            return np.zeros((h, w), np.uint8), np.full((h, w), _NO_HIT[2], np.float32)
         ny, nx = grid.shape
-        full = np.asarray(cv2.resize(nodes.reshape(3 * ny, nx), (nx * STEP, 3 * ny * STEP),
+        full = np.asarray(cv2.resize(plan.nodes.reshape(3 * ny, nx), (nx * STEP, 3 * ny * STEP),
                                      interpolation=cv2.INTER_LINEAR)).reshape(3, -1)
         for c in range(3):
-            full[c][idx] = vals[c]
+            full[c][plan.idx] = plan.vals[c]
         X, Y, W = full.reshape(3, ny * STEP, nx * STEP)[:, STEP:STEP + h, STEP:STEP + w]
         cv2.divide(X, W, dst=X)  # in place: texture coordinates, the maps of the remap
         cv2.divide(Y, W, dst=Y)
         img = cv2.remap(self._atlas, X, Y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
-        return np.asarray(img, np.uint8), W, rest
+        return np.asarray(img, np.uint8), W
