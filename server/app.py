@@ -144,7 +144,7 @@ async def _start_services(stack: contextlib.AsyncExitStack, ctx: AppContext, rt:
     ctx.exports = ExportJobs(ctx.sessions, s.data_dir)
     stack.push_async_callback(asyncio.to_thread, ctx.exports.close)
     ctx.media = MediaPipeline(rt, MediaConfig(s.video_bitrate, s.video_gop, s.stamp_frames, s.mjpeg_fps,
-                                              s.mjpeg_quality, s.media_queue))
+                                              s.mjpeg_quality, s.media_queue, s.background_nice))
     ctx.media.start()
     stack.push_async_callback(asyncio.to_thread, ctx.media.stop)
     ctx.viewers = Viewers(ctx.media, s.ice_servers)

@@ -59,6 +59,9 @@ class Settings(BaseSettings):
     media_queue: int = Field(6, ge=1, le=90, description="frames waiting for the H.264 encoders before the oldest "
                              "is dropped: a short stall of the media thread costs the recording nothing, a "
                              "long one drops frames (neither shown nor recorded) rather than delaying the video")
+    background_nice: int = Field(5, ge=0, le=19, description="how much nicer (Linux nice steps) the threads that "
+                                 "consume the tracker's frames (H.264 encoding) run than the tracker's own: when "
+                                 "they compete for a core, the frame with a deadline goes first (0: the same)")
     mjpeg_fps: float = Field(15.0, gt=0, le=60, description="MJPEG fallback frames per second")
     mjpeg_quality: int = Field(80, ge=1, le=100, description="MJPEG fallback JPEG quality")
     ice_servers: list[str] = Field(default_factory=list, description="STUN/TURN URLs for WebRTC (none by default)")

@@ -18,6 +18,7 @@ from numpy.typing import NDArray
 
 from tmeye.media.encoder import EncodedFrame, H264Encoder, pts_of, stamp
 from tmeye.runtime.publish import Hub
+from tmeye.runtime.threads import lower_priority
 from tmeye.runtime.worker import FrameEvent, Runtime
 
 log = logging.getLogger("tmeye.media")
@@ -29,7 +30,8 @@ class MediaConfig:
     """bitrate: H.264 bits per second per camera; gop: frames between keyframes; stamp_frames: draw the
     frame index in the top-left corner of the video (never the tracker's input); mjpeg_fps / mjpeg_quality:
     the MJPEG fallback's rate (frames per second) and JPEG quality (1-100); queue: frames waiting for the
-    encoders before the oldest is dropped (a dropped frame is neither shown nor recorded)."""
+    encoders before the oldest is dropped (a dropped frame is neither shown nor recorded); nice: how much
+    nicer than the tracker's worker the encoding thread and libx264's threads run (0: the same)."""
 
     bitrate: int = 1_500_000
     gop: int = 45
@@ -37,6 +39,7 @@ class MediaConfig:
     mjpeg_fps: float = 15.0
     mjpeg_quality: int = 80
     queue: int = 2
+    nice: int = 0
 
 
 @dataclass(frozen=True)
@@ -83,6 +86,7 @@ class MediaPipeline:
         return self.packets[camera].subscribers > 0 or self.recorders > 0
 
     def _run(self) -> None:
+        lower_priority(self.config.nice)  # before the encoders start their threads, which inherit it
         sub = self.runtime.hub.subscribe(maxsize=self.config.queue, name="media")
         try:
             while not self._stop.is_set():
