@@ -21,6 +21,8 @@ from server_helpers import Server
 from tmeye.recordcheck import check_segment, start_pts_of, telemetry_by_pts
 
 FLOOR_MB = 8
+NEAR = {"name": "anyone within 1 km", "priority": "high", "on_delay_s": 0, "off_delay_s": 3600,
+        "condition": {"kind": "range_below", "distance_m": 1000}}
 ENV = {"TMEYE_SEGMENT_S": "2", "TMEYE_MIN_FREE_MB": str(FLOOR_MB)}
 
 
@@ -67,6 +69,9 @@ def test_disk_full_stops_recording_fails_writes_safely_and_recovers(server: Serv
     with s.as_admin() as c:
         wait_for("closed segments of both cameras", lambda: len({x["camera"] for x in closed_segments(c)}) == 2)
         assert c.post("/api/servo/presets", json={"name": "before", "pan_deg": 1, "tilt_deg": 2}).status_code == 201
+        rule = c.post("/api/alarm-rules", json=NEAR).json()["id"]
+        (alarm, *_), _ = wait_for("the rule's alarm", lambda: [a for a in c.get("/api/alarms").json()
+                                                                if a["rule_id"] == rule])
         before = closed_segments(c)
         tracks_before = len(c.get("/api/tracks", params={"limit": 10000}).json())
 
@@ -86,6 +91,8 @@ def test_disk_full_stops_recording_fails_writes_safely_and_recovers(server: Serv
             codes.append(r.status_code)
             time.sleep(0.1)
         print("preset writes on the full disk:", {k: codes.count(k) for k in set(codes)})
+        r = c.post(f"/api/alarms/{alarm['id']}/ack", json={"comment": "on a full disk"})
+        assert r.status_code == 503, r.text  # not stored, so not acknowledged: it can be done again later
         stored = {p["name"] for p in c.get("/api/servo/presets").json()}
         assert all((f"full-{i}" in stored) == (code == 201) for i, code in enumerate(codes))  # nothing half-way
         assert c.get("/api/tracks").status_code == 200 and c.get("/api/alarms").status_code == 200
@@ -122,4 +129,8 @@ def test_disk_full_stops_recording_fails_writes_safely_and_recovers(server: Serv
         decodes(c, [x for x in closed_segments(c) if x["start"] > before[-1]["start"]])  # the cut one and new ones
         assert len(c.get("/api/tracks", params={"limit": 10000}).json()) >= tracks_before
         assert {"before", "under-floor"} <= {p["name"] for p in c.get("/api/servo/presets").json()}
+        r = c.post(f"/api/alarms/{alarm['id']}/ack", json={"comment": "space is back"})
+        assert r.status_code == 200 and r.json()["acked_by"] == "admin", r.text
+        hist = c.get(f"/api/alarms/{alarm['id']}").json()["history"]
+        assert [h["comment"] for h in hist if h["kind"] == "acknowledged"] == ["space is back"]
     assert integrity_check(s) == "ok"

@@ -119,6 +119,7 @@ class CameraRecorder:
             self.owner.failed(f"{self.camera}: cannot open segment {rel}", exc)
             return
         self.asked_key = False
+        self.owner.resumed()
         self.owner.written(self.camera, first)
         while self.ring:
             self._write(self.ring.popleft())
@@ -168,6 +169,7 @@ class Recorder:
         self.unfinished: list[int] = []  # segments whose close failed: repaired (or dropped) when possible
         self._retry_s = 0.0
         self._retry_at = 0.0
+        self._retrying = False  # the fault stands until a segment opens again (no alarm chatter per retry)
         self.last_event: float | None = None
         self.telemetry_rows = self.telemetry_missing = 0
         self._telemetry: OrderedDict[int, dict[str, Any]] = OrderedDict()
@@ -230,6 +232,7 @@ class Recorder:
     def failed(self, what: str, exc: BaseException) -> None:
         """A write failed: stop recording (every open segment closed) until `_check_disk` retries."""
         first = self.fault is None
+        self._retrying = False
         self.fault = f"{what}: {type(exc).__name__}: {exc}".splitlines()[0][:300] + ": recording stopped"
         if first:
             self._retry_s = min(RETRY_MAX_S, max(DISK_CHECK_S, 2 * self._retry_s))
@@ -294,7 +297,7 @@ class Recorder:
         self.last_event = t if last is None else max(last, t)
 
     def _wanted(self, t: float) -> bool:
-        if self.fault:
+        if self.fault and not self._retrying:
             return False
         if self.config.mode == "continuous":
             return True
@@ -331,10 +334,11 @@ class Recorder:
             self.data_dir.mkdir(parents=True, exist_ok=True)
             free_mb = shutil.disk_usage(self.data_dir).free / 1e6
         except OSError as exc:
-            self.fault = f"the data directory cannot be checked: {exc}: recording stopped"
+            self.fault, self._retrying = f"the data directory cannot be checked: {exc}: recording stopped", False
             return
         floor = self.config.min_free_mb
         if free_mb < floor:
+            self._retrying = False
             if self.fault is None or "below the floor" not in self.fault:
                 self.fault = f"free disk space {free_mb:.0f} MB is below the floor of {floor:.0f} MB: recording stopped"
                 log.error("%s", self.fault)
@@ -342,8 +346,16 @@ class Recorder:
                 cam.close()
         elif self.fault is not None and free_mb >= floor + max(1.0, 0.05 * floor) and \
                 time.monotonic() >= self._retry_at and not self.unfinished:
-            log.warning("recording resumed (%.0f MB free) after: %s", free_mb, self.fault)
-            self.fault = None
+            if "below the floor" in self.fault:
+                self.resumed()  # the space is back: nothing needs to be tried to know it
+            else:
+                self._retrying = True  # a failed write: the fault stands until a segment opens again
+
+    def resumed(self) -> None:
+        """A segment opened: a standing fault is over."""
+        if self.fault is not None:
+            log.warning("recording resumed after: %s", self.fault)
+            self.fault, self._retrying = None, False
 
     def _repair_unfinished(self) -> None:
         while self.unfinished:
