@@ -3,7 +3,8 @@
 database writes answer 503 or succeed, never 500; the server keeps running and tracking), then gives some back
 but stays under the recording floor (the recording, disk and database alarms are stored and shown), then is
 deleted: recording resumes, the alarms clear, and nothing stored before is lost (segments decode, rows
-intact, integrity_check ok)."""
+intact, integrity_check ok); the track samples taken while the disk was full were kept in memory and
+written once it could store again."""
 
 from __future__ import annotations
 
@@ -128,6 +129,9 @@ def test_disk_full_stops_recording_fails_writes_safely_and_recovers(server: Serv
         decodes(c, before)
         decodes(c, [x for x in closed_segments(c) if x["start"] > before[-1]["start"]])  # the cut one and new ones
         assert len(c.get("/api/tracks", params={"limit": 10000}).json()) >= tracks_before
+        during = [p["t"] for t in c.get("/api/tracks", params={"start": t_full, "end": t_some}).json()
+                  for p in c.get(f"/api/tracks/{t['id']}").json()["trajectory"]]
+        assert any(t_full + 0.5 < t < t_some - 0.5 for t in during)  # samples kept in memory, written later
         assert {"before", "under-floor"} <= {p["name"] for p in c.get("/api/servo/presets").json()}
         r = c.post(f"/api/alarms/{alarm['id']}/ack", json={"comment": "space is back"})
         assert r.status_code == 200 and r.json()["acked_by"] == "admin", r.text

@@ -36,7 +36,8 @@ def check_all(server: Server) -> list[dict[str, Any]]:
                 if exc.response.status_code == 404:
                     continue  # retention deleted it between the listing and the fetch
                 raise
-            if chk.error is not None and c.get(f"/api/recordings/{seg['id']}/file").status_code == 404:
+            gone = chk.error is not None or not (server.data_dir / seg["path"]).is_file()
+            if gone and c.get(f"/api/recordings/{seg['id']}/file").status_code == 404:
                 continue  # retention deleted it meanwhile (its row first: no row is left without a file)
             assert (server.data_dir / seg["path"]).is_file(), seg
             assert chk.error is None and chk.decoded == seg["frames"] > 0, (seg, chk)
