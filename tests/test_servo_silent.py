@@ -27,7 +27,7 @@ def wait_for(cond: Callable[[], Any], timeout: float) -> Any:
 @pytest.fixture
 def silent_server(tmp_path: Path) -> Iterator[tuple[Server, PtyDevice]]:
     dev = PtyDevice(tmp_path / "ttyMaestro", FakeMaestro())
-    s = start_server(tmp_path / "data", "--servo", f"maestro:{dev.link}?timeout=0.5")
+    s = start_server(tmp_path / "data", "--servo", f"maestro:{dev.link}?timeout=0.3")
     yield s, dev
     s.stop()
     dev.unplug()
