@@ -65,8 +65,13 @@ class Server:
 def start_server(data_dir: Path, *args: str, env: dict[str, str] | None = None, wait_s: float = 120.0) -> Server:
     """`tmeye serve --port 0 --data-dir DATA ARGS` until /api/health says ok."""
     data_dir.mkdir(parents=True, exist_ok=True)
-    log = data_dir / "server.log"
     cmd = [sys.executable, "-m", "tmeye", "serve", "--port", "0", "--data-dir", str(data_dir), *args]
+    return launch(cmd, data_dir, data_dir / "server.log", env, wait_s)
+
+
+def launch(cmd: list[str], data_dir: Path, log: Path, env: dict[str, str] | None = None,
+           wait_s: float = 120.0) -> Server:
+    """Run `cmd` (a `tmeye serve` that prints its URL first) until /api/health says ok."""
     proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=log.open("w"), text=True,
                             preexec_fn=end_with_parent,  # no server outlives a failed or killed test run
                             env={**os.environ, **(env or {})})

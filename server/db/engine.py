@@ -4,6 +4,8 @@
 from __future__ import annotations
 
 import logging
+import os
+import sqlite3
 import threading
 from pathlib import Path
 from typing import Any
@@ -58,3 +60,28 @@ def upgrade(url: str) -> None:
     """Bring the database at `url` to the newest migration (creating it if absent)."""
     with _upgrade_lock:
         command.upgrade(alembic_config(url), "head")
+
+
+def storage_problem(data_dir: Path, db_path: Path) -> str | None:
+    """Why the server could not store anything in `data_dir` and its database (one line), or None: the
+    directory must be creatable and writable and an existing database must take a write transaction."""
+    try:
+        data_dir.mkdir(parents=True, exist_ok=True)
+        probe = data_dir / f".write-test-{os.getpid()}"
+        os.close(os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600))
+        probe.unlink()
+    except OSError as exc:
+        return f"the data directory {data_dir} is not writable: {exc.strerror or exc}"
+    if not db_path.exists():
+        return None
+    try:
+        con = sqlite3.connect(db_path, timeout=BUSY_TIMEOUT_MS / 1000)
+        try:
+            con.execute("BEGIN IMMEDIATE")
+            con.execute("CREATE TABLE _tmeye_write_test (x INTEGER)")  # a real write, rolled back
+            con.rollback()
+        finally:
+            con.close()
+    except sqlite3.Error as exc:
+        return f"the database {db_path} cannot be written: {exc}"
+    return None

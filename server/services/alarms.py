@@ -3,16 +3,20 @@ a periodic tick (device faults show even when no frame comes) in its own thread,
 stores every transition (alarm rows, their history, the audit log for operator actions) and pushes it to
 `/ws/events` clients as {"type": "alarm", "alarm": ..., "transition": ...}; the flood state goes out as
 {"type": "alarm_flood", ...}. Operator actions (ack, shelve, unshelve) and rule changes come from the
-routers' threads; one lock keeps the engine and the alarm rows in step."""
+routers' threads; one lock keeps the engine and the alarm rows in step. While the database cannot store
+(full, read-only, locked), evaluated transitions wait in memory and are stored, with their own times, once it
+can; an operator action or rule change that cannot be stored is undone in the engine (the API answers 503)."""
 
 from __future__ import annotations
 
+import contextlib
+import copy
 import logging
 import shutil
 import threading
 import time
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -32,6 +36,8 @@ from server.services.events import EventBus
 from tmeye.runtime import FrameEvent, Runtime
 
 log = logging.getLogger("tmeye.alarms")
+MAX_UNSTORED = 10_000  # transitions kept while the database cannot store them (the oldest go first)
+STORE_RETRY_S = 1.0  # how often storing them is tried again (s)
 Probe = Callable[[], "str | None"]
 
 
@@ -65,6 +71,9 @@ class AlarmService:
         self._disk: int | None = None
         self._db_fault: str | None = None
         self._write_fault: str | None = None
+        self._unstored: list[Transition] = []
+        self._store_at = 0.0
+        self._store_failures = 0
         self._last_t = 0.0
 
     # --- life cycle ----------------------------------------------------------------------------------
@@ -132,8 +141,19 @@ class AlarmService:
         self._last_t = snap.t
         with self.lock:
             trs = self.engine.step(snap)
-            if trs:
-                self._commit(trs, None, None)
+            self._unstored = (self._unstored + trs)[-MAX_UNSTORED:]
+            if self._unstored and time.monotonic() >= self._store_at:
+                try:
+                    self._commit(self._unstored, None, None)
+                    self._unstored = []
+                except Exception as exc:  # kept; tried again in a second
+                    self._store_at = time.monotonic() + STORE_RETRY_S
+                    (log.exception if self._store_failures == 0 else log.warning)(
+                        "storing %d alarm transitions failed (kept, retried): %s", len(self._unstored),
+                        str(exc).splitlines()[0])
+                    self._store_failures += 1
+                else:
+                    self._store_failures = 0
         for tr in trs:
             if tr.kind == "activated":
                 for hook in self.on_activated:
@@ -145,6 +165,7 @@ class AlarmService:
         own = db is None
         session = self.sessions() if db is None else db
         pushed: list[tuple[dict[str, Any], dict[str, Any] | None]] = []
+        rows = dict(self.rows)
         try:
             for tr in trs:
                 if tr.kind in ("flood", "flood_end"):
@@ -167,6 +188,7 @@ class AlarmService:
             self._write_fault = None
         except Exception as exc:
             session.rollback()
+            self.rows = rows  # as they were: the rows this attempt added or ended were not stored
             self._write_fault = f"storing alarms failed: {type(exc).__name__}: {exc}".splitlines()[0]
             raise
         finally:
@@ -200,6 +222,16 @@ class AlarmService:
             return f"database unavailable: {type(exc).__name__}: {exc}".splitlines()[0]
         return None
 
+    @contextlib.contextmanager
+    def _undo_on_failure(self) -> Iterator[None]:
+        """Under the lock: an engine change whose transitions cannot be stored is undone."""
+        saved = copy.deepcopy(self.engine)
+        try:
+            yield
+        except Exception:
+            self.engine = saved
+            raise
+
     # --- operator actions ----------------------------------------------------------------------------
     def act(self, db: Session, user: User, address: str, alarm_id: int,
             action: Callable[[str, float], list[Transition]]) -> dict[str, Any]:
@@ -212,11 +244,12 @@ class AlarmService:
             point = self.engine.points.get(row.rule_key)
             if occ is None or point is None or point.occurrence != occ:
                 raise Conflict(f"alarm {alarm_id} is {row.state.replace('_', ' ')}: it can no longer change")
-            try:
-                trs = action(row.rule_key, time.time())
-            except AlarmStateError as exc:
-                raise Conflict(str(exc)) from None
-            self._commit(trs, user, address, db)
+            with self._undo_on_failure():
+                try:
+                    trs = action(row.rule_key, time.time())
+                except AlarmStateError as exc:
+                    raise Conflict(str(exc)) from None
+                self._commit(trs, user, address, db)
         db.refresh(row)
         return store.alarm_json(row)
 
@@ -235,12 +268,12 @@ class AlarmService:
     def rule_changed(self, db: Session, rule: Rule, user: User | None, address: str | None) -> None:
         """After a rule row was added or changed in `db` (not yet committed): update the engine, store the
         transitions (taking out of service, back in service) and commit."""
-        with self.lock:
+        with self.lock, self._undo_on_failure():
             trs = self.engine.set_rule(rule, time.time(), None if user is None else user.username)
             self._commit(trs, user, address, db)
 
     def rule_removed(self, db: Session, key: str, user: User, address: str) -> None:
-        with self.lock:
+        with self.lock, self._undo_on_failure():
             self._commit(self.engine.remove_rule(key, time.time(), user.username), user, address, db)
 
     def create_rule(self, db: Session, user: User, address: str, values: dict[str, Any]) -> dict[str, Any]:
@@ -259,7 +292,7 @@ class AlarmService:
     def delete_rule(self, db: Session, user: User, address: str, rule_id: int) -> None:
         row = store.get_rule(db, rule_id)
         audit.record(db, user, address, "alarm_rule.delete", f"rule {row.id}", {"name": row.name})
-        with self.lock:
+        with self.lock, self._undo_on_failure():
             trs = self.engine.remove_rule(f"rule:{rule_id}", time.time(), user.username)
             db.delete(row)
             self._commit(trs, user, address, db)

@@ -4,8 +4,10 @@ with the telemetry of every recorded frame, in its own thread (never the tracker
 Modes: continuous; events (footage from `preroll_s` before a frame with detections, from a ring buffer of
 packets that always starts on a keyframe, to `postroll_s` after the last one); off. A segment ends at the
 first keyframe after `segment_s` (the recorder asks the encoder for one then), so every segment starts on a
-keyframe. While the disk holding the data directory has less than `min_free_mb` free, nothing is written and
-the status carries the fault (tracking goes on).
+keyframe. While the disk holding the data directory has less than `min_free_mb` free, or after a write failed
+(the disk full, the database unable to store a segment's row), nothing is written and the status carries the
+fault (tracking goes on); recording resumes once the disk has the floor plus a margin free again (a failed
+write is retried with a back-off from 2 s to 60 s).
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ from tmeye.runtime.publish import Subscription
 
 log = logging.getLogger("tmeye.recording")
 DISK_CHECK_S = 2.0
+RETRY_MAX_S = 60.0
 TELEMETRY_FLUSH_S = 1.0
 KEY_LEAD_S = 0.02  # ask for the next segment's keyframe this long before the segment's length is reached
 
@@ -97,31 +100,39 @@ class CameraRecorder:
             return
         first = self.ring.popleft()
         rel = self.owner.free_path(segment_path(self.camera, first.captured_at))
-        self.seg_id = segments.open_row(self.owner.sessions, self.camera, kind, rel, first.captured_at, first.pts)
+        try:
+            self.seg_id = segments.open_row(self.owner.sessions, self.camera, kind, rel, first.captured_at,
+                                            first.pts)
+        except Exception as exc:
+            self.errors += 1
+            self.ring.clear()
+            self.owner.failed(f"{self.camera}: storing the row of segment {rel} failed", exc)
+            return
         try:
             self.muxer = SegmentMuxer(self.owner.data_dir / rel, first)
-        except Exception:
+        except Exception as exc:
             self.errors += 1
-            log.exception("%s: cannot open segment %s", self.camera, rel)
-            segments.delete_row(self.owner.sessions, self.seg_id)
+            (self.owner.data_dir / rel).unlink(missing_ok=True)
+            self.owner.unfinished.append(self.seg_id)  # its row goes once the database takes the change
             self.seg_id, self.muxer = None, None
             self.ring.clear()
+            self.owner.failed(f"{self.camera}: cannot open segment {rel}", exc)
             return
         self.asked_key = False
+        self.owner.resumed()
         self.owner.written(self.camera, first)
         while self.ring:
             self._write(self.ring.popleft())
 
     def _write(self, ef: EncodedFrame) -> None:
         assert self.muxer is not None
-        if ef.keyframe:  # the muxer writes the finished fragment now: its frames' telemetry goes first
-            self.owner.commit_telemetry()
+        if ef.keyframe and not self.owner.commit_telemetry():
+            return  # the muxer would write the finished fragment now, but its frames' telemetry is not stored
         try:
             self.muxer.write(ef)
-        except Exception:
+        except Exception as exc:
             self.errors += 1
-            log.exception("%s: writing frame %d failed; segment closed", self.camera, ef.frame_no)
-            self.close()
+            self.owner.failed(f"{self.camera}: writing frame {ef.frame_no} failed", exc)
             return
         self.owner.written(self.camera, ef)
 
@@ -133,13 +144,15 @@ class CameraRecorder:
         self.owner.commit_telemetry()
         try:
             size = mux.close()
-        except Exception:
+            segments.close_row(self.owner.sessions, seg_id, size=size, offsets=mux.offsets,
+                               frame_nos=mux.frame_nos, keyframes=mux.keyframes)
+        except Exception as exc:
             self.errors += 1
-            log.exception("%s: closing %s failed (start-up reconciliation will repair it)", self.camera, mux.path)
+            self.owner.unfinished.append(seg_id)  # repaired from its file up to its last complete fragment
+            self.owner.failed(f"{self.camera}: closing {mux.path.name} failed", exc)
             return
-        segments.close_row(self.owner.sessions, seg_id, size=size, offsets=mux.offsets, frame_nos=mux.frame_nos,
-                           keyframes=mux.keyframes)
         self.segments += 1
+        self.owner._retry_s = 0.0
         self.frames += len(mux.offsets)
         self.bytes += size
 
@@ -153,6 +166,10 @@ class Recorder:
         self.config = config
         self.cameras = {c: CameraRecorder(c, self) for c in CAMERAS}
         self.fault: str | None = None
+        self.unfinished: list[int] = []  # segments whose close failed: repaired (or dropped) when possible
+        self._retry_s = 0.0
+        self._retry_at = 0.0
+        self._retrying = False  # the fault stands until a segment opens again (no alarm chatter per retry)
         self.last_event: float | None = None
         self.telemetry_rows = self.telemetry_missing = 0
         self._telemetry: OrderedDict[int, dict[str, Any]] = OrderedDict()
@@ -200,10 +217,30 @@ class Recorder:
             out = rel[:-4] + f"-{n}.mp4"
         return out
 
-    def commit_telemetry(self) -> None:
-        """Store the telemetry of the frames written so far (before a fragment reaches the file)."""
+    def commit_telemetry(self) -> bool:
+        """Store the telemetry of the frames written so far (before a fragment reaches the file); False when
+        that failed (recording then stops)."""
         self._take_telemetry()
-        self._flush_telemetry()
+        try:
+            self._flush_telemetry()
+        except Exception as exc:
+            if self.fault is None:
+                self.failed("storing the telemetry of recorded frames failed", exc)
+            return False
+        return True
+
+    def failed(self, what: str, exc: BaseException) -> None:
+        """A write failed: stop recording (every open segment closed) until `_check_disk` retries."""
+        first = self.fault is None
+        self._retrying = False
+        self.fault = f"{what}: {type(exc).__name__}: {exc}".splitlines()[0][:300] + ": recording stopped"
+        if first:
+            self._retry_s = min(RETRY_MAX_S, max(DISK_CHECK_S, 2 * self._retry_s))
+            self._retry_at = time.monotonic() + self._retry_s
+        (log.exception if first else log.error)("%s (retry in %.0f s)", self.fault, self._retry_s)
+        for cam in self.cameras.values():
+            if cam.muxer is not None:
+                cam.close()
 
     def written(self, camera: str, ef: EncodedFrame) -> None:
         self._pending.setdefault(ef.frame_no, ef.pts)
@@ -216,14 +253,17 @@ class Recorder:
                 self._wake.wait(0.2)
                 self._wake.clear()
                 now = time.monotonic()
-                if now >= next_disk:
-                    self._check_disk()
-                    next_disk = now + DISK_CHECK_S
-                self._take_telemetry()
-                self._take_packets()
-                if now >= next_flush:
-                    self._flush_telemetry()
-                    next_flush = now + TELEMETRY_FLUSH_S
+                try:
+                    if now >= next_disk:
+                        self._check_disk()
+                        next_disk = now + DISK_CHECK_S
+                    self._take_telemetry()
+                    self._take_packets()
+                    if now >= next_flush:
+                        self.commit_telemetry()
+                        next_flush = now + TELEMETRY_FLUSH_S
+                except Exception as exc:  # recording stops and is retried; the thread goes on
+                    self.failed("recording failed", exc)
         except Exception:
             log.exception("recorder stopped")
             self.fault = "recorder stopped after an error (see the log)"
@@ -232,7 +272,10 @@ class Recorder:
             self._take_packets()
             for cam in self.cameras.values():
                 cam.close()
-            self._flush_telemetry(final=True)
+            try:
+                self._flush_telemetry(final=True)
+            except Exception:
+                log.exception("storing the last telemetry rows failed")
             for c, sub in self._subs.items():
                 self.media.packets[c].unsubscribe(sub)
             if self._tm_sub is not None:
@@ -254,7 +297,7 @@ class Recorder:
         self.last_event = t if last is None else max(last, t)
 
     def _wanted(self, t: float) -> bool:
-        if self.fault:
+        if self.fault and not self._retrying:
             return False
         if self.config.mode == "continuous":
             return True
@@ -280,17 +323,45 @@ class Recorder:
         try:
             self.telemetry_rows += segments.save_telemetry(self.sessions, rows)
         except Exception:
-            log.exception("storing %d telemetry rows failed", len(rows))
+            self.telemetry_missing += len(rows)
+            raise
 
     def _check_disk(self) -> None:
-        self.data_dir.mkdir(parents=True, exist_ok=True)
-        free_mb = shutil.disk_usage(self.data_dir).free / 1e6
+        """Stop recording under the free-space floor; resume (after a failed write: at its retry time) once the
+        floor plus a margin (5 % of it, at least 1 MB) is free; repair the segments whose close failed."""
+        self._repair_unfinished()
+        try:
+            self.data_dir.mkdir(parents=True, exist_ok=True)
+            free_mb = shutil.disk_usage(self.data_dir).free / 1e6
+        except OSError as exc:
+            self.fault, self._retrying = f"the data directory cannot be checked: {exc}: recording stopped", False
+            return
         floor = self.config.min_free_mb
-        if self.fault is None and free_mb < floor:
-            self.fault = f"free disk space {free_mb:.0f} MB is below the floor of {floor:.0f} MB: recording stopped"
-            log.error("recording stopped: %s", self.fault)
+        if free_mb < floor:
+            self._retrying = False
+            if self.fault is None or "below the floor" not in self.fault:
+                self.fault = f"free disk space {free_mb:.0f} MB is below the floor of {floor:.0f} MB: recording stopped"
+                log.error("%s", self.fault)
             for cam in self.cameras.values():
                 cam.close()
-        elif self.fault is not None and self.fault.startswith("free disk") and free_mb >= floor * 1.05 + 50:
-            log.warning("free disk space %.0f MB: recording again", free_mb)
-            self.fault = None
+        elif self.fault is not None and free_mb >= floor + max(1.0, 0.05 * floor) and \
+                time.monotonic() >= self._retry_at and not self.unfinished:
+            if "below the floor" in self.fault:
+                self.resumed()  # the space is back: nothing needs to be tried to know it
+            else:
+                self._retrying = True  # a failed write: the fault stands until a segment opens again
+
+    def resumed(self) -> None:
+        """A segment opened: a standing fault is over."""
+        if self.fault is not None:
+            log.warning("recording resumed after: %s", self.fault)
+            self.fault, self._retrying = None, False
+
+    def _repair_unfinished(self) -> None:
+        while self.unfinished:
+            try:
+                segments.repair(self.sessions, self.data_dir, self.unfinished[0])
+            except Exception as exc:
+                log.warning("repairing segment %d failed (retried): %s", self.unfinished[0], str(exc).splitlines()[0])
+                return
+            self.unfinished.pop(0)

@@ -82,6 +82,20 @@ def reconcile(sessions: sessionmaker[Session], data_dir: Path) -> dict[str, int]
     return out
 
 
+def repair(sessions: sessionmaker[Session], data_dir: Path, seg_id: int) -> str:
+    """One segment whose writing failed: its file cut after the last complete fragment and its row corrected,
+    or both removed (nothing usable, or no file). Returns cut, dropped or missing."""
+    with sessions() as db, db.begin():
+        row = db.get(Segment, seg_id)
+        if row is None:
+            return "missing"
+        f = data_dir / row.path
+        if not f.exists():
+            db.delete(row)
+            return "missing"
+        return _repair(db, row, f)
+
+
 def _repair(db: Session, row: Segment, f: Path) -> str:
     size = truncate_to_fragments(f)
     idx = index_file(f) if size else None
@@ -97,7 +111,7 @@ def _repair(db: Session, row: Segment, f: Path) -> str:
     row.frame_offsets = idx.pts
     row.frame_nos = [int(nos.get(row.start_pts + p, -1)) for p in idx.pts]
     row.keyframes = [round(k / CLOCK_HZ, 6) for k in idx.keyframes]
-    log.warning("segment %d (%s): cut by a crash; kept %d frames up to its last complete fragment",
+    log.warning("segment %d (%s): cut (a crash or a failed write); kept %d frames up to its last complete fragment",
                 row.id, row.path, row.frames)
     return "cut"
 

@@ -42,8 +42,13 @@ def register(subparsers: Any) -> None:
                    help="measure recording instead: frames in exactly one segment per camera over --seconds, "
                         "stamps against telemetry, /api/playback/frame at --probes random times, the worker's "
                         "frame-time cost of recording, --kills SIGKILL restarts")
+    p.add_argument("--crash", action="store_true",
+                   help="measure crash safety instead: an alarm acknowledged, --kills SIGKILLs at random moments "
+                        "(integrity_check, committed rows and the acknowledgement kept, recordings decode), then "
+                        "SIGTERM (stop time, segments closed)")
     p.add_argument("--probes", type=int, default=100, help="--recording: random playback times (default 100)")
-    p.add_argument("--kills", type=int, default=20, help="--recording: SIGKILLs at random moments (default 20)")
+    p.add_argument("--kills", type=int, default=20,
+                   help="--recording, --crash: SIGKILLs at random moments (default 20)")
     p.add_argument("--cost-seconds", type=float, default=20.0,
                    help="--recording: seconds per with/without-recorder round of the worker cost (0: skip)")
     p.add_argument("--serve-args", default="", help="--server: extra `tmeye serve` arguments, e.g. '--servo none'")
@@ -106,7 +111,23 @@ def run_recording(args: argparse.Namespace) -> int:
     return 0
 
 
+def run_crash(args: argparse.Namespace) -> int:
+    import shlex
+    import tempfile
+    from pathlib import Path
+
+    from tmeye.crashcheck import run as crash_run
+
+    if not 1 <= args.kills <= 1000:
+        raise UserError(f"--kills must be 1 to 1000 for --crash, got {args.kills}")
+    with tempfile.TemporaryDirectory(prefix="tmeye-bench-crash-") as tmp:
+        emit(crash_run(Path(tmp), args.kills, shlex.split(args.serve_args)), args.json)
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
+    if args.crash:
+        return run_crash(args)
     if args.recording:
         return run_recording(args)
     if args.webrtc:

@@ -71,8 +71,12 @@ def run(args: argparse.Namespace) -> int:
     import uvicorn
 
     from server.app import create_app
+    from server.db.engine import storage_problem
 
     settings = settings_from(args)
+    problem = storage_problem(settings.data_dir, settings.db_path)
+    if problem:
+        raise UserError(problem)
     # The tracker's worker thread and the event loop share the GIL: hand it over within 1 ms (Python's
     # default 5 ms delayed WebSocket sends by up to that while the worker ran Python code).
     sys.setswitchinterval(0.001)
