@@ -40,11 +40,13 @@ class RangeBelowCondition(Strict):
 
 
 class ApproachCondition(Strict):
-    """Closing speed −dr/dt of the primary target (from the predictor) above speed_mps for for_s."""
+    """Closing speed −dr/dt of the primary target (from the predictor) above speed_mps for for_s; it stays
+    true until the speed falls under speed_mps − deadband_mps (ISA-18.2 deadband, against chattering)."""
 
     kind: Literal["approach"]
     speed_mps: float = Field(gt=0, le=100)
     for_s: float = Field(0.0, ge=0, le=600)
+    deadband_mps: float = Field(0.3, ge=0, le=100)
 
 
 class SizeCondition(Strict):

@@ -205,3 +205,31 @@ def test_device_faults_from_health() -> None:
     assert set(slow) == {"frame_rate", "servo", "recording", "database", "disk"}
     assert device_faults(Health(100.0, "running", up_s=2.0), th) == {}  # the first frame may take a while
     assert "no frame 6.0 s after the start" in device_faults(Health(100.0, "running", up_s=6.0), th)["camera"]
+
+
+def test_a_detection_gap_inside_the_zone_holds_and_a_new_id_nearby_ends_the_hold() -> None:
+    e = engine(BOX, off=0.5)
+    dt = 1 / 30
+    snaps = [at(k * dt, person(z=6.0), frame=k) for k in range(10)]
+    snaps += [at(k * dt, frame=k) for k in range(10, 55)]  # 1.5 s without a detection: still inside
+    snaps += [at(k * dt, person(z=6.1, tid=5), frame=k) for k in range(55, 60)]
+    assert kinds_of(run(e, snaps)) == ["activated"]
+    e = engine(BOX, off=0.5)
+    snaps = [at(k * dt, person(z=6.0), frame=k) for k in range(10)]
+    snaps += [at(k * dt, person(x=1.05, tid=2), frame=k) for k in range(10, 40)]  # taken up as 2, outside
+    got = run(e, snaps)
+    assert kinds_of(got) == ["activated", "cleared"]
+    assert got[1][0] == pytest.approx(10 * dt + 0.5, abs=dt)  # cleared after the off-delay, not the 2 s hold
+    e = engine(BOX)
+    snaps = [at(k * dt, person(z=6.0), frame=k) for k in range(10)] + [at(k * dt, frame=k) for k in range(10, 80)]
+    got = run(e, snaps)
+    assert kinds_of(got) == ["activated", "cleared"] and got[1][0] == pytest.approx(9 * dt + 2.0, abs=2 * dt)
+
+
+def test_approach_deadband_and_unknown_speed() -> None:
+    e = engine(Approach(1.0, for_s=0.0, deadband_mps=0.3), off=0.0)
+    speeds = [1.2, 0.9, 0.8, 0.75, None, None, 0.9, 0.6, 0.6]
+    got = run(e, [at(k / 10, person(), frame=k, primary=1, closing=v) for k, v in enumerate(speeds)])
+    assert got == [(0.0, "activated"), (pytest.approx(0.7), "cleared")]  # under 0.7 m/s only at 0.7 s
+    with pytest.raises(ValueError, match="deadband_mps"):
+        condition_from_dict({"kind": "approach", "speed_mps": 0.5, "deadband_mps": 0.6})

@@ -3,9 +3,10 @@ loop on the simulated gimbal, as `tmeye serve` runs by default), compared with t
 the scene's true target positions.
 
 Per rule, the truth is the rule's condition on the true objects of each frame (every object in the scene:
-world position, range about the origin, closing speed −dr/dt by differences between frames), with the
-rule's own delays: an expected alarm starts at the first frame the condition holds (plus the on-delay, or
-the approach rule's `for_s`) and ends `off_delay_s` after the last frame it holds (runs closer than the
+world position, range about the origin, closing speed −dr/dt by differences between frames, the approach
+rule's deadband), with the rule's own delays: an expected alarm starts at the first frame the condition
+holds (plus the on-delay, or the approach rule's `for_s`) and ends `off_delay_s` after the last frame it
+holds (runs closer than the
 off-delay merge). `entries` counts the raw runs (e.g. true zone entries). An alarm matches an expected one
 when their intervals overlap; misses and false alarms are the unmatched ones; activation and clear errors
 are alarm minus expected times (s) of the matched pairs (a positive activation error is a late alarm).
@@ -48,7 +49,10 @@ class RuleRecord:
     alarms: list[list[float]] = field(default_factory=list)  # [activated, cleared (nan while active)]
 
 
-def truth_value(rule: Rule, tr: FrameTruth, closing: dict[int, float], origin: np.ndarray) -> bool:
+def truth_value(rule: Rule, tr: FrameTruth, closing: dict[int, float], origin: np.ndarray, was: bool = False
+                ) -> bool:
+    """The rule's condition on the true objects of a frame; was: its value at the frame before (the
+    approach rule's deadband)."""
     c = rule.condition
     if isinstance(c, Zone):
         return any(c.contains(Target(t.target_id, float(t.world[0]), float(t.world[1]), float(t.world[2]), 0.0))
@@ -56,7 +60,7 @@ def truth_value(rule: Rule, tr: FrameTruth, closing: dict[int, float], origin: n
     if isinstance(c, RangeBelow):
         return any(float(np.linalg.norm(t.world - origin)) < c.distance_m for t in tr.targets)
     if isinstance(c, Approach):
-        return any(v > c.speed_mps for v in closing.values())
+        return any(v > c.speed_mps or (was and v >= c.speed_mps - c.deadband_mps) for v in closing.values())
     raise ValueError(f"no truth for {c.kind}")
 
 
@@ -142,7 +146,8 @@ def evaluate_alarms(minutes: float = 10.0, seed: int = 0, rules: tuple[Rule, ...
             closing = {i: (last_r[i] - r) / dt for i, r in ranges.items() if i in last_r}
             last_r = ranges
             for rec in recs.values():
-                rec.truth.append((frame.t, truth_value(rec.rule, truth, closing, origin)))
+                was = bool(rec.truth) and rec.truth[-1][1]
+                rec.truth.append((frame.t, truth_value(rec.rule, truth, closing, origin, was)))
             for tr in engine.step(snapshot_from(frame.t, first + k, tm, step, cfg.origin)):
                 rec = recs[str(tr.rule)]
                 if tr.kind == "activated":
