@@ -231,6 +231,9 @@ def test_approach_deadband_and_unknown_speed() -> None:
     speeds = [1.2, 0.9, 0.8, 0.75, None, None, 0.9, 0.6, 0.6]
     got = run(e, [at(k / 10, person(), frame=k, primary=1, closing=v) for k, v in enumerate(speeds)])
     assert got == [(0.0, "activated"), (pytest.approx(0.7), "cleared")]  # under 0.7 m/s only at 0.7 s
+    e = engine(Approach(1.0, for_s=0.3))  # one wild sample, then the speed unknown: for_s does not pass
+    speeds = [0.2, 9.0, None, None, None, None, None, 0.2]
+    assert run(e, [at(k / 10, person(), frame=k, primary=1, closing=v) for k, v in enumerate(speeds)]) == []
     with pytest.raises(ValueError, match="deadband_mps"):
         condition_from_dict({"kind": "approach", "speed_mps": 0.5, "deadband_mps": 0.6})
 

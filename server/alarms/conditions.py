@@ -21,7 +21,8 @@ another track is seen where the missing one could be by now (within `REACQUIRE_M
 times the time since it was last seen): the tracker has taken the same target up again under a new id,
 or split a part of it off for a few frames. A target seen outside is outside at once. The approach
 rule's closing speed is unknown (None) while the predictor coasts or is unsure of it (see
-server.alarms.snapshot); an unknown speed keeps the last value for `HOLD_S`. The
+server.alarms.snapshot); an unknown speed keeps the last value for `HOLD_S` (and does not count towards the
+rule's for_s). The
 approach rule has a deadband (ISA-18.2): it stays true until the speed falls under speed_mps −
 deadband_mps, so a target walking at about the threshold does not chatter.
 """
@@ -281,11 +282,14 @@ def _frame_value(c: Condition, snap: Snapshot, mem: Memory) -> tuple[bool, int |
 
 def _approach(c: Approach, snap: Snapshot, mem: Memory) -> tuple[bool, int | None]:
     """Closing faster than speed_mps (until under speed_mps − deadband_mps) for for_s; an unknown speed
-    keeps the last state for HOLD_S."""
+    keeps the last value for HOLD_S but does not make for_s pass (a single fast sample followed by unknown
+    ones raises nothing)."""
     v = snap.closing_mps
     if v is None:
         if mem.speed_known is None or snap.t - mem.speed_known > HOLD_S:
             mem.fast, mem.fast_since = False, None
+            return False, None
+        return mem.value, mem.target
     else:
         mem.speed_known = snap.t
         mem.fast = v > c.speed_mps or (mem.fast and v >= c.speed_mps - c.deadband_mps)

@@ -6,9 +6,11 @@ of r):
     −dr/dt = −u·v,  u = (p − o) / |p − o|,  σ = √(uᵀ P_v u).
 
 The closing speed is unknown (None) unless the predictor was updated by this frame's detection (a
-coasting predictor extrapolates a velocity no detection supports) and σ ≤ CLOSING_SIGMA_MAX_MPS (a
-track just started has σ of metres per second). The primary target's position is the predictor's
-filtered one when it was updated by this frame (it smooths the single-frame disparity outliers of a raw
+coasting predictor extrapolates a velocity no detection supports), the update was consistent with the
+state (normalised innovation squared under NIS_GATE, the 99.9 % point of χ² with 3 degrees of freedom: a
+wrong disparity that puts the target metres nearer for a frame is not a target running at 10 m/s) and
+σ ≤ CLOSING_SIGMA_MAX_MPS (a track just started has σ of metres per second). The primary target's
+position is the predictor's filtered one when it was updated by this frame (it smooths the single-frame disparity outliers of a raw
 fix); the other targets' are their raw fixes."""
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from tracker.closedloop import LoopStep
 from tracker.predict import PredictedState, TrackStatus
 
 CLOSING_SIGMA_MAX_MPS = 0.5
+NIS_GATE = 16.27  # χ²(3) at 0.999
 
 
 def _tracking(step: LoopStep | None) -> PredictedState | None:
@@ -34,7 +37,8 @@ def closing_speed(step: LoopStep | None, origin: Sequence[float]) -> float | Non
     """−dr/dt (m/s, positive when approaching) of the predictor's state updated by this frame, None when
     there is none or its 1-σ is over CLOSING_SIGMA_MAX_MPS."""
     st = _tracking(step)
-    if st is None:
+    est = None if step is None else step.estimate
+    if st is None or (est is not None and est.nis is not None and est.nis > NIS_GATE):
         return None
     rel = np.asarray(st.position, float) - np.asarray(origin, float)
     r = float(np.linalg.norm(rel))
