@@ -10,8 +10,8 @@ coasting predictor extrapolates a velocity no detection supports), the update wa
 state (normalised innovation squared under NIS_GATE, the 99.9 % point of χ² with 3 degrees of freedom: a
 wrong disparity that puts the target metres nearer for a frame is not a target running at 10 m/s) and
 σ ≤ CLOSING_SIGMA_MAX_MPS (a track just started has σ of metres per second). The primary target's
-position is the predictor's filtered one when it was updated by this frame (it smooths the single-frame disparity outliers of a raw
-fix); the other targets' are their raw fixes."""
+position is the predictor's filtered one when it was updated by this frame (it smooths the single-frame
+disparity outliers of a raw fix); the other targets' are their raw fixes."""
 
 from __future__ import annotations
 
