@@ -8,7 +8,7 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, ConfigDict, Field
 
 Priority = Literal["critical", "high", "medium", "low"]
-AlarmState = Literal["unack", "ack", "rtn_unack", "shelved", "out_of_service", "normal"]
+AlarmState = Literal["unack", "ack", "rtn_unack", "shelved", "suppressed", "out_of_service", "normal"]
 
 
 class Strict(BaseModel):
@@ -40,11 +40,13 @@ class RangeBelowCondition(Strict):
 
 
 class ApproachCondition(Strict):
-    """Closing speed −dr/dt of the primary target (from the predictor) above speed_mps for for_s."""
+    """Closing speed −dr/dt of the primary target (from the predictor) above speed_mps for for_s; it stays
+    true until the speed falls under speed_mps − deadband_mps (ISA-18.2 deadband, against chattering)."""
 
     kind: Literal["approach"]
     speed_mps: float = Field(gt=0, le=100)
     for_s: float = Field(0.0, ge=0, le=600)
+    deadband_mps: float = Field(0.3, ge=0, le=100)
 
 
 class SizeCondition(Strict):
@@ -58,7 +60,8 @@ class SizeCondition(Strict):
 
 
 class LostCondition(Strict):
-    """The primary target not seen for longer than after_s."""
+    """The primary target not seen for longer than after_s. Suppressed by design while the mount is not in
+    auto mode (manual, hold or home: the operator points it)."""
 
     kind: Literal["lost"]
     after_s: float = Field(gt=0, le=3600)
@@ -103,6 +106,8 @@ class AlarmRuleOut(BaseModel):
     out_of_service: bool
     created_at: float
     updated_at: float
+    built_in: bool = Field(description="a built-in device fault rule: read-only but for out_of_service, not deletable")
+    state: AlarmState | None = Field(description="the state of the rule's alarm now (suppressed: by design)")
 
 
 class AlarmOut(BaseModel):
@@ -110,7 +115,7 @@ class AlarmOut(BaseModel):
         {"id": 7, "rule_id": 1, "rule_key": "rule:1", "name": "Gate zone", "priority": "critical",
          "state": "unack", "activated_at": 1795000000.1, "cleared_at": None, "acked_at": None, "acked_by": None,
          "updated_at": 1795000000.1, "frame": 1234, "target_id": 3, "run_id": "20261122T220000-123.0",
-         "message": None, "shelved_until": None, "shelve_reason": None}]})
+         "message": None, "shelved_until": None, "shelve_reason": None, "shelved_one_shot": False}]})
 
     id: int
     rule_id: int | None
@@ -127,14 +132,16 @@ class AlarmOut(BaseModel):
     target_id: int | None = Field(description="the track number (of run_id) that triggered it")
     run_id: str | None
     message: str | None
-    shelved_until: float | None
+    shelved_until: float | None = Field(description="when the shelving ends (one-shot: at the latest)")
     shelve_reason: str | None
+    shelved_one_shot: bool = Field(description="shelved until the alarm next clears (OPC UA one-shot shelving)")
 
 
 class AlarmEventOut(BaseModel):
     id: int
     at: float
-    kind: str = Field(description="activated, cleared, acknowledged, shelved, unshelved, out_of_service, removed")
+    kind: str = Field(description="activated, cleared, acknowledged, shelved, unshelved, suppressed, "
+                                  "out_of_service, removed")
     state_from: str | None
     state_to: str | None
     username: str | None = Field(description="who did it; null for the engine")
@@ -155,13 +162,18 @@ class AckRequest(Strict):
 
 
 class ShelveRequest(Strict):
-    minutes: float = Field(gt=0, description="how long; at most the server's limit (8 h by default)")
+    minutes: float | None = Field(None, gt=0, description="timed shelving: how long; at most the server's limit "
+                                  "(8 h by default)")
     reason: str = Field(min_length=1, max_length=500)
+    one_shot: bool = Field(False, description="instead of minutes: shelved until the alarm next clears (an active "
+                           "alarm), at most the server's limit")
 
 
 class AlarmSummary(BaseModel):
     open: dict[str, int] = Field(description="alarms in the list (unack, ack, rtn_unack) per priority")
     unacknowledged: dict[str, int]
-    flood: bool = Field(description="more than 10 new alarms in 10 minutes (ends below 5)")
-    new_in_window: int
+    flood: bool = Field(description="the caller's flood: more than 10 new alarms in 10 minutes since they logged in "
+                        "(ends below 5)")
+    new_in_window: int = Field(description="new alarms in the window since the caller logged in")
     window_s: float
+    flooded_operators: list[str] = Field(description="the logged-in operators in flood")

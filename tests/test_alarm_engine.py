@@ -21,8 +21,8 @@ BOX = Zone("box", x_min=-1, x_max=1, z_min=5, z_max=8)
 
 
 def at(t: float, *targets: Target, frame: int | None = 0, primary: int | None = None,
-       closing: float | None = None, faults: dict[str, str] | None = None) -> Snapshot:
-    return Snapshot(t, frame, tuple(targets), primary, closing, faults or {})
+       closing: float | None = None, faults: dict[str, str] | None = None, servo_mode: str | None = None) -> Snapshot:
+    return Snapshot(t, frame, tuple(targets), primary, closing, faults or {}, servo_mode)
 
 
 def person(x: float = 0.0, z: float = 6.0, tid: int = 1, w: float = 0.5, h: float = 1.7) -> Target:
@@ -205,3 +205,92 @@ def test_device_faults_from_health() -> None:
     assert set(slow) == {"frame_rate", "servo", "recording", "database", "disk"}
     assert device_faults(Health(100.0, "running", up_s=2.0), th) == {}  # the first frame may take a while
     assert "no frame 6.0 s after the start" in device_faults(Health(100.0, "running", up_s=6.0), th)["camera"]
+
+
+def test_a_detection_gap_inside_the_zone_holds_and_a_new_id_nearby_ends_the_hold() -> None:
+    e = engine(BOX, off=0.5)
+    dt = 1 / 30
+    snaps = [at(k * dt, person(z=6.0), frame=k) for k in range(10)]
+    snaps += [at(k * dt, frame=k) for k in range(10, 55)]  # 1.5 s without a detection: still inside
+    snaps += [at(k * dt, person(z=6.1, tid=5), frame=k) for k in range(55, 60)]
+    assert kinds_of(run(e, snaps)) == ["activated"]
+    e = engine(BOX, off=0.5)
+    snaps = [at(k * dt, person(z=6.0), frame=k) for k in range(10)]
+    snaps += [at(k * dt, person(x=1.05, tid=2), frame=k) for k in range(10, 40)]  # taken up as 2, outside
+    got = run(e, snaps)
+    assert kinds_of(got) == ["activated", "cleared"]
+    assert got[1][0] == pytest.approx(10 * dt + 0.5, abs=dt)  # cleared after the off-delay, not the 2 s hold
+    e = engine(BOX)
+    snaps = [at(k * dt, person(z=6.0), frame=k) for k in range(10)] + [at(k * dt, frame=k) for k in range(10, 80)]
+    got = run(e, snaps)
+    assert kinds_of(got) == ["activated", "cleared"] and got[1][0] == pytest.approx(9 * dt + 2.0, abs=2 * dt)
+
+
+def test_approach_deadband_and_unknown_speed() -> None:
+    e = engine(Approach(1.0, for_s=0.0, deadband_mps=0.3), off=0.0)
+    speeds = [1.2, 0.9, 0.8, 0.75, None, None, 0.9, 0.6, 0.6]
+    got = run(e, [at(k / 10, person(), frame=k, primary=1, closing=v) for k, v in enumerate(speeds)])
+    assert got == [(0.0, "activated"), (pytest.approx(0.7), "cleared")]  # under 0.7 m/s only at 0.7 s
+    e = engine(Approach(1.0, for_s=0.3))  # one wild sample, then the speed unknown: for_s does not pass
+    speeds = [0.2, 9.0, None, None, None, None, None, 0.2]
+    assert run(e, [at(k / 10, person(), frame=k, primary=1, closing=v) for k, v in enumerate(speeds)]) == []
+    with pytest.raises(ValueError, match="deadband_mps"):
+        condition_from_dict({"kind": "approach", "speed_mps": 0.5, "deadband_mps": 0.6})
+
+
+def test_one_shot_shelving_lasts_until_the_alarm_clears() -> None:
+    e = engine(RangeBelow(5.0), off=0.5, max_shelve_s=3600)
+    e.step(at(0, person(z=4)))
+    e.step(at(0.1, person(z=4)))
+    with pytest.raises(AlarmStateError, match="not both"):
+        e.shelve("rule:1", 0.2, "op", 5, "x", one_shot=True)
+    s = e.shelve("rule:1", 0.2, "op", None, "checking the gate", one_shot=True)[0]
+    assert (s.state_to, s.one_shot, s.until) == ("shelved", True, pytest.approx(3600.2))
+    assert e.step(at(10.0, person(z=4))) == [] and e.step(at(10.2, person(z=9))) == []  # off-delay not yet over
+    u = e.step(at(10.8, person(z=9)))
+    assert [(x.kind, x.state_to, x.comment) for x in u] == [("unshelved", "normal",
+                                                            "one-shot shelving ended: the alarm cleared")]
+    assert e.points["rule:1"].occurrence is None
+    b = e.step(at(11.0, person(z=4)))  # the next activation is annunciated again
+    assert [(x.kind, x.opened) for x in b] == [("activated", True)]
+    e.step(at(11.1, person(z=9)))
+    e.step(at(11.7, person(z=9)))  # cleared, unacknowledged: one-shot shelving has nothing to wait for
+    with pytest.raises(AlarmStateError, match="has cleared"):
+        e.shelve("rule:1", 11.8, "op", None, "x", one_shot=True)
+
+
+def test_a_lost_rule_is_suppressed_by_design_while_the_mount_is_not_in_auto() -> None:
+    e = engine(Lost(1.0))
+    snaps = [at(k / 10, person(), frame=k, primary=1) for k in range(5)]
+    snaps += [at(k / 10, frame=k) for k in range(5, 20)]  # lost from 0.5 s: active at 1.5 s
+    got = [tr for s in snaps for tr in e.step(s)]
+    assert [x.kind for x in got] == ["activated"]
+    manual = [at(k / 10, frame=k, servo_mode="manual") for k in range(20, 60)]
+    got = [tr for s in manual for tr in e.step(s)]
+    assert [(x.kind, x.state_to, x.occurrence is not None) for x in got] == [("suppressed", "suppressed", True)]
+    assert "manual mode" in (got[0].message or "") and e.points["rule:1"].state == "suppressed"
+    with pytest.raises(AlarmStateError):
+        e.shelve("rule:1", 6.0, "op", 5, "x")
+    auto = [at(k / 10, frame=k, servo_mode="auto") for k in range(60, 90)]
+    got = [(tr.t, tr.kind) for s in auto for tr in e.step(s)]
+    assert got == [(6.0, "unsuppressed"), (pytest.approx(7.1), "activated")]  # the lost clock started afresh
+    e2 = engine(Zone("box", x_min=-1, x_max=1, z_min=5, z_max=8))
+    assert [x.kind for s in (at(0, person(), servo_mode="manual"), at(0.1, person(), servo_mode="manual"))
+            for x in e2.step(s)] == ["activated"]  # other rules are not suppressed
+
+
+def test_flood_per_logged_in_operator() -> None:
+    e = engine(RangeBelow(5.0))
+    e.set_operators({"olga": 0.0, "oscar": 150.0})
+    t, events = 0.0, []
+    for _ in range(12):  # twelve activations 20 s apart from 0 to 220 s
+        for z in (4, 4, 9):
+            events += e.step(at(t, person(z=z)))
+            t += 1.0
+        e.ack("rule:1", t, "op") if e.points["rule:1"].state != "normal" else None
+        t += 17.0
+    floods = [(x.kind, x.user) for x in events if x.kind.startswith("flood")]
+    assert floods == [("flood", "olga")]  # oscar logged in at 150 s: 4 of the 12 were annunciated to him
+    assert e.flooded("olga") and not e.flooded("oscar") and e.recent_count("oscar") == 4
+    e.set_operators({"oscar": 150.0})  # olga logged out: she is out of flood, silently
+    assert not e.flood and e.step(at(t, frame=None)) == []

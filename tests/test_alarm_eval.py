@@ -28,6 +28,12 @@ def test_runs_expected_and_compare() -> None:
     res = compare(exp, got, end=9.9)
     assert (res["expected"], res["alarms"], res["matched"], res["misses"], res["false_alarms"]) == (2, 3, 2, 0, 1)
     assert res["activation_error"]["max_abs_s"] == 0.1 and res["clear_error"]["within_0.1s"] == 1
+    assert res["out_of_view"] is None
+    seen = [(k * dt, 15 <= k < 20) for k in range(100)]  # the first run seen only from 1.5 s, the second never
+    late = compare(exp, [(1.6, 4.0)], end=9.9, in_view=seen)
+    assert late["out_of_view"] == {"misses": 1, "late": 1}
+    assert compare(exp, [(1.6, 4.0)], end=9.9, in_view=[(t, True) for t, _ in seen])["out_of_view"] == {
+        "misses": 0, "late": 0}
 
 
 def test_short_run_and_bad_input() -> None:
@@ -38,6 +44,7 @@ def test_short_run_and_bad_input() -> None:
     assert res["frames"] == 180 and len(res["rules"]) == 3
     for r in res["rules"]:
         assert r["matched"] + r["misses"] == r["expected"] and r["alarms"] >= r["matched"]
+        assert r["out_of_view"]["misses"] <= r["misses"]
     bad = subprocess.run([sys.executable, "-m", "tmeye", "eval", "--alarms", "--minutes", "0"],
                          capture_output=True, text=True, timeout=60)
     assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1 and "--minutes" in bad.stderr

@@ -64,13 +64,81 @@ def test_rules_crud_and_bad_input(server: Server, tokens: dict[str, str]) -> Non
             r = c.post("/api/alarm-rules", json=body)
             assert r.status_code == 422 and needle in r.json()["detail"], r.text
         assert c.patch("/api/alarm-rules/99999", json={"name": "x"}).status_code == 404
-        assert len(c.get("/api/alarm-rules").json()) == 1  # nothing stored half-way
+        assert len(own_rules(c)) == 1  # nothing stored half-way
         assert c.delete(f"/api/alarm-rules/{rid}").status_code == 204
-        assert c.get("/api/alarm-rules").json() == []
+        assert own_rules(c) == []
     with server.client(tokens["operator"]) as c:
         assert c.post("/api/alarm-rules", json=zone).status_code == 403
     with server.client(tokens["viewer"]) as c:
         assert c.get("/api/alarm-rules").status_code == 200
+
+
+def own_rules(c: Any) -> list[dict[str, Any]]:
+    return [r for r in c.get("/api/alarm-rules").json() if not r["built_in"]]
+
+
+def test_built_in_fault_rules_are_listed_read_only_and_can_go_out_of_service(server: Server,
+                                                                             tokens: dict[str, str]) -> None:
+    with server.client(tokens["admin"]) as c:
+        built = {r["condition"]["source"]: r for r in c.get("/api/alarm-rules").json() if r["built_in"]}
+        assert set(built) == {"camera", "frame_rate", "servo", "recording", "disk", "database"}
+        cam = built["camera"]
+        assert cam["priority"] == "critical" and cam["enabled"] and cam["state"] == "normal"
+        r = c.delete(f"/api/alarm-rules/{cam['id']}")
+        assert r.status_code == 409 and "built in" in r.json()["detail"] and "out of service" in r.json()["detail"]
+        r = c.patch(f"/api/alarm-rules/{cam['id']}", json={"priority": "low"})
+        assert r.status_code == 409 and "only out_of_service" in r.json()["detail"]
+        r = c.patch(f"/api/alarm-rules/{cam['id']}", json={"out_of_service": True})
+        assert r.status_code == 200 and r.json()["out_of_service"] and r.json()["built_in"]
+        now = {x["id"]: x for x in c.get("/api/alarm-rules").json()}[cam["id"]]
+        assert now["state"] == "out_of_service" and now["priority"] == "critical"
+        assert c.patch(f"/api/alarm-rules/{cam['id']}", json={"out_of_service": False}).status_code == 200
+        assert {x["id"]: x for x in c.get("/api/alarm-rules").json()}[cam["id"]]["state"] == "normal"
+        audit = c.get("/api/audit", params={"action": "alarm_rule.update"}).json()
+        assert any(e["target"] == f"rule {cam['id']}" for e in audit)
+    with server.client(tokens["operator"]) as c:
+        assert c.patch(f"/api/alarm-rules/{cam['id']}", json={"out_of_service": True}).status_code == 403
+
+
+def test_lost_rule_suppressed_by_design_in_manual_mode(server: Server, tokens: dict[str, str]) -> None:
+    with server.client(tokens["admin"]) as admin, server.client(tokens["operator"]) as op:
+        rid = admin.post("/api/alarm-rules", json={"name": "target lost", "priority": "low",
+                                                   "condition": {"kind": "lost", "after_s": 0.5}}).json()["id"]
+
+        def state() -> str:
+            return str({x["id"]: x for x in admin.get("/api/alarm-rules").json()}[rid]["state"])
+        try:
+            assert op.put("/api/servo/mode", json={"mode": "manual"}).status_code == 200
+            wait_for(lambda: state() == "suppressed", 3.0)
+            assert op.put("/api/servo/mode", json={"mode": "auto"}).status_code == 200
+            wait_for(lambda: state() != "suppressed", 3.0)
+        finally:
+            op.put("/api/servo/mode", json={"mode": "auto"})
+            admin.delete(f"/api/alarm-rules/{rid}")
+
+
+def test_one_shot_shelving_until_the_alarm_clears(server: Server, tokens: dict[str, str]) -> None:
+    with server.client(tokens["admin"]) as admin, server.client(tokens["operator"]) as op:
+        rid = admin.post("/api/alarm-rules", json={**NEAR, "name": "one-shot", "off_delay_s": 0.5}).json()["id"]
+        try:
+            def active() -> Any:
+                return [a for a in op.get("/api/alarms", params={"state": "unack"}).json() if a["rule_id"] == rid]
+            for _ in range(3):  # an alarm that clears between the two requests is one-shot shelved no more
+                aid = wait_for(active, 120.0, 0.2)[0]["id"]
+                for bad in ({"minutes": 5, "one_shot": True, "reason": "x"}, {"reason": "x"}):
+                    assert op.post(f"/api/alarms/{aid}/shelve", json=bad).status_code == 422
+                r = op.post(f"/api/alarms/{aid}/shelve", json={"one_shot": True, "reason": "walker seen, till gone"})
+                if r.status_code != 409:
+                    break
+                assert "cleared" in r.json()["detail"] or "normal" in r.json()["detail"], r.text
+            assert r.status_code == 200 and r.json()["state"] == "shelved" and r.json()["shelved_one_shot"], r.text
+            done = wait_for(lambda: op.get(f"/api/alarms/{aid}").json()["state"] == "normal", 120.0, 0.5)
+            assert done
+            hist = op.get(f"/api/alarms/{aid}").json()["history"]
+            assert [h["kind"] for h in hist][-2:] == ["shelved", "unshelved"]
+            assert hist[-1]["username"] is None and "one-shot" in hist[-1]["comment"]
+        finally:
+            admin.delete(f"/api/alarm-rules/{rid}")
 
 
 async def _events(url: str, token: str, seconds: float, out: list[dict[str, Any]]) -> None:
@@ -127,6 +195,7 @@ def test_lifecycle_roles_history_audit_and_push(server: Server, tokens: dict[str
         assert any(e["username"] == "olga" and e["target"] == f"alarm {aid}" for e in audit)
         summary = viewer.get("/api/alarms/summary").json()
         assert set(summary["open"]) == {"critical", "high", "medium", "low"} and "flood" in summary
+        assert isinstance(summary["flooded_operators"], list) and isinstance(summary["flood"], bool)
         admin.patch(f"/api/alarm-rules/{rid}", json={"out_of_service": True})
         wait_for(lambda: viewer.get(f"/api/alarms/{aid}").json()["state"] in ("out_of_service", "normal"), 5)
         admin.delete(f"/api/alarm-rules/{rid}")
@@ -134,6 +203,39 @@ def test_lifecycle_roles_history_audit_and_push(server: Server, tokens: dict[str
     mine = [e for e in pushed if e["type"] == "alarm" and e["alarm"]["id"] == aid]
     assert mine and mine[0]["transition"]["kind"] == "activated"
     assert any(e["transition"]["kind"] == "acknowledged" and e["transition"]["user"] == "olga" for e in mine)
+
+
+def test_flood_is_counted_per_logged_in_operator(server: Server, tokens: dict[str, str]) -> None:
+    """Eleven new alarms (a rule enabled, its alarm acknowledged, disabled: cleared, enabled again while
+    someone is in view) flood the operators logged in before them, not one who logs in after."""
+    with server.client(tokens["admin"]) as admin, server.client(tokens["operator"]) as op:
+        rid = admin.post("/api/alarm-rules", json={**NEAR, "name": "flood", "off_delay_s": 0}).json()["id"]
+        try:
+            opened: set[int] = set()
+            deadline = time.monotonic() + 240
+            while len(opened) < 11 and time.monotonic() < deadline:
+                mine = [a for a in op.get("/api/alarms", params={"state": "unack"}).json() if a["rule_id"] == rid]
+                if not mine:
+                    time.sleep(0.1)
+                    continue
+                aid = mine[0]["id"]
+                opened.add(aid)
+                op.post(f"/api/alarms/{aid}/ack", json={"comment": "flood test"})
+                admin.patch(f"/api/alarm-rules/{rid}", json={"enabled": False})
+                wait_for(lambda a=aid: admin.get(f"/api/alarms/{a}").json()["state"] == "normal", 10.0)
+                admin.patch(f"/api/alarm-rules/{rid}", json={"enabled": True})
+            assert len(opened) == 11
+            summary = wait_for(lambda: (x := op.get("/api/alarms/summary").json())["flood"] and x, 10.0)
+            assert summary["new_in_window"] >= 11 and {"olga", "admin"} <= set(summary["flooded_operators"])
+            late = server.add_user("lena", "operator")  # logged in after the eleven: not flooded by them
+            time.sleep(3.0)  # the logged-in operators are looked up every 2 s
+            with server.client(late) as c:
+                mine = c.get("/api/alarms/summary").json()
+                assert not mine["flood"] and mine["new_in_window"] < 11 and "lena" not in mine["flooded_operators"]
+            audit = admin.get("/api/audit", params={"action": "alarm.flood"}).json()
+            assert any(e["target"] == "operator olga" for e in audit)
+        finally:
+            admin.delete(f"/api/alarm-rules/{rid}")
 
 
 @pytest.fixture

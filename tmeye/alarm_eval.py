@@ -3,16 +3,21 @@ loop on the simulated gimbal, as `tmeye serve` runs by default), compared with t
 the scene's true target positions.
 
 Per rule, the truth is the rule's condition on the true objects of each frame (every object in the scene:
-world position, range about the origin, closing speed −dr/dt by differences between frames), with the
-rule's own delays: an expected alarm starts at the first frame the condition holds (plus the on-delay, or
-the approach rule's `for_s`) and ends `off_delay_s` after the last frame it holds (runs closer than the
+world position, range about the origin, closing speed −dr/dt by differences between frames, the approach
+rule's deadband), with the rule's own delays: an expected alarm starts at the first frame the condition
+holds (plus the on-delay, or the approach rule's `for_s`) and ends `off_delay_s` after the last frame it
+holds (runs closer than the
 off-delay merge). `entries` counts the raw runs (e.g. true zone entries). An alarm matches an expected one
 when their intervals overlap; misses and false alarms are the unmatched ones; activation and clear errors
 are alarm minus expected times (s) of the matched pairs (a positive activation error is a late alarm).
+`out_of_view` counts the misses during which the condition never held for an object seen by both cameras
+(its pixels in both images: no camera saw what would raise the alarm) and the late activations (over 0.1 s)
+whose condition held for a seen object only later than 0.1 s after the expected start.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -45,10 +50,14 @@ class RuleRecord:
 
     rule: Rule
     truth: list[tuple[float, bool]] = field(default_factory=list)
+    in_view: list[tuple[float, bool]] = field(default_factory=list)  # the condition on objects both cameras see
     alarms: list[list[float]] = field(default_factory=list)  # [activated, cleared (nan while active)]
 
 
-def truth_value(rule: Rule, tr: FrameTruth, closing: dict[int, float], origin: np.ndarray) -> bool:
+def truth_value(rule: Rule, tr: FrameTruth, closing: dict[int, float], origin: np.ndarray, was: bool = False
+                ) -> bool:
+    """The rule's condition on the true objects of a frame; was: its value at the frame before (the
+    approach rule's deadband)."""
     c = rule.condition
     if isinstance(c, Zone):
         return any(c.contains(Target(t.target_id, float(t.world[0]), float(t.world[1]), float(t.world[2]), 0.0))
@@ -56,7 +65,7 @@ def truth_value(rule: Rule, tr: FrameTruth, closing: dict[int, float], origin: n
     if isinstance(c, RangeBelow):
         return any(float(np.linalg.norm(t.world - origin)) < c.distance_m for t in tr.targets)
     if isinstance(c, Approach):
-        return any(v > c.speed_mps for v in closing.values())
+        return any(v > c.speed_mps or (was and v >= c.speed_mps - c.deadband_mps) for v in closing.values())
     raise ValueError(f"no truth for {c.kind}")
 
 
@@ -91,9 +100,11 @@ def expected(rule: Rule, raw: list[Interval]) -> list[Interval]:
     return [(s, e + rule.off_delay_s) for s, e in out]
 
 
-def compare(exp: list[Interval], got: list[Interval], end: float) -> dict[str, Any]:
+def compare(exp: list[Interval], got: list[Interval], end: float,
+            in_view: list[tuple[float, bool]] | None = None, hold: float = 0.0) -> dict[str, Any]:
     """Expected against produced alarm intervals; `end`: the run's end (s): a clear expected after it is not
-    timed."""
+    timed; in_view: the condition on the objects both cameras see, per frame; hold: the condition's own hold
+    (s, before the expected start)."""
     def overlaps(a: Interval, b: Interval) -> bool:
         return a[0] <= b[1] and b[0] <= a[1]
 
@@ -110,8 +121,15 @@ def compare(exp: list[Interval], got: list[Interval], end: float) -> dict[str, A
                 "max_abs_s": round(float(a.max()), 4) if v else None,
                 "within_0.1s": int((a <= 0.1 + 1e-9).sum())}
 
+    def seen_from(e: Interval) -> float:
+        return next((t for t, v in in_view or () if v and e[0] - hold - 1e-9 <= t <= e[1]), math.inf)
+
+    missed = [e for e in exp if all(not overlaps(e, g) for g in got)]
+    unseen = {"misses": sum(seen_from(e) == math.inf for e in missed),
+              "late": sum(g[0] - e[0] > 0.1 + 1e-9 and seen_from(e) > e[0] - hold + 0.1 + 1e-9 for e, g in matched)}
     return {"expected": len(exp), "alarms": len(got), "matched": len(matched), "misses": len(exp) - len(matched),
             "false_alarms": len(false), "split": split, "activation_error": stats(on), "clear_error": stats(off),
+            "out_of_view": unseen if in_view is not None else None,
             "false_alarm_times": [round(g[0], 2) for g in false][:20],
             "missed_times": [round(e[0], 2) for e in exp if all(not overlaps(e, g) for g in got)][:20]}
 
@@ -141,8 +159,14 @@ def evaluate_alarms(minutes: float = 10.0, seed: int = 0, rules: tuple[Rule, ...
             ranges = {t.target_id: float(np.linalg.norm(t.world - origin)) for t in truth.targets}
             closing = {i: (last_r[i] - r) / dt for i, r in ranges.items() if i in last_r}
             last_r = ranges
+            seen = ({int(k) for k in np.unique(truth.ids_left)} & {int(k) for k in np.unique(truth.ids_right)}) - {0}
+            visible = dataclasses.replace(truth, targets=tuple(t for t in truth.targets if t.target_id in seen))
             for rec in recs.values():
-                rec.truth.append((frame.t, truth_value(rec.rule, truth, closing, origin)))
+                was = bool(rec.truth) and rec.truth[-1][1]
+                rec.truth.append((frame.t, truth_value(rec.rule, truth, closing, origin, was)))
+                was = bool(rec.in_view) and rec.in_view[-1][1]
+                rec.in_view.append((frame.t, truth_value(rec.rule, visible, {i: v for i, v in closing.items()
+                                                                             if i in seen}, origin, was)))
             for tr in engine.step(snapshot_from(frame.t, first + k, tm, step, cfg.origin)):
                 rec = recs[str(tr.rule)]
                 if tr.kind == "activated":
@@ -160,6 +184,7 @@ def evaluate_alarms(minutes: float = 10.0, seed: int = 0, rules: tuple[Rule, ...
         got = [(a, c if math.isfinite(c) else math.inf) for a, c in rec.alarms]  # inf: still active at the end
         res = {"name": rec.rule.name, "condition": condition_to_dict(rec.rule.condition),
                "on_delay_s": rec.rule.on_delay_s, "off_delay_s": rec.rule.off_delay_s, "entries": len(raw)}
-        res.update(compare(expected(rec.rule, raw), got, rec.truth[-1][0]))
+        hold = rec.rule.condition.for_s if isinstance(rec.rule.condition, Approach) else 0.0
+        res.update(compare(expected(rec.rule, raw), got, rec.truth[-1][0], rec.in_view, hold))
         out["rules"].append(res)
     return out

@@ -97,12 +97,13 @@ def stereo_sigmas(
 @dataclass(frozen=True)
 class PredictedState:
     """Predicted target state at time t (s): position (3,) m, velocity (3,) m/s, position covariance
-    (3, 3) m², all in the world frame."""
+    (3, 3) m², all in the world frame; velocity_covariance (3, 3) (m/s)², None when not known."""
 
     t: float
     position: F64
     velocity: F64
     covariance: F64
+    velocity_covariance: F64 | None = None
 
 
 class TrackStatus(StrEnum):
@@ -224,7 +225,7 @@ class UKFBankPredictor:
             raise ValueError(f"cannot predict at {t:.6f} s, before the track's time {self._t:.6f} s")
         xs, Ps, cbar = self._predict(dt)
         x, P = combine(xs, Ps, cbar)
-        return PredictedState(t, x[0:3].copy(), x[3:6].copy(), P[0:3, 0:3].copy())
+        return PredictedState(t, x[0:3].copy(), x[3:6].copy(), P[0:3, 0:3].copy(), P[3:6, 3:6].copy())
 
     def nees(self, truth_position: F64) -> float:
         if self._last is None or self._last.state is None:
@@ -292,7 +293,7 @@ class UKFBankPredictor:
         if self._t is None:
             return TrackEstimate(t, TrackStatus.LOST, None, 0.0, None, mu)
         x, P = combine(self._X, self._P, self._mu)
-        state = PredictedState(t, x[0:3].copy(), x[3:6].copy(), P[0:3, 0:3].copy())
+        state = PredictedState(t, x[0:3].copy(), x[3:6].copy(), P[0:3, 0:3].copy(), P[3:6, 3:6].copy())
         status = TrackStatus.TRACKING if self.coasting_s == 0.0 else TrackStatus.COASTING
         return TrackEstimate(t, status, state, self.coasting_s, nis, mu)
 

@@ -12,18 +12,32 @@ Conditions:
 - `Size`: a target whose metric width and height lie inside bounds;
 - `Lost`: the primary target not seen for longer than `after_s` (after one was seen);
 - `Fault`: a built-in device fault source reports a fault.
-Targets count once their track has been seen in `MIN_HITS` consecutive frames (the tracker's own
-confirmation), so a single-frame false detection raises nothing.
+Conditions on targets are evaluated per target (per track id): a target counts once its track has been
+seen in `MIN_HITS` frames (the tracker's own confirmation), so a single-frame false detection raises
+nothing; a track missing from a frame (a detection gap) keeps the value it had when last seen for
+`HOLD_S`, as long as the tracker itself keeps a track without detections, so a person standing in a zone
+who is not detected for a second does not clear the alarm and raise it again. The hold ends early when
+another track is seen where the missing one could be by now (within `REACQUIRE_M` + `REACQUIRE_MPS`
+times the time since it was last seen): the tracker has taken the same target up again under a new id,
+or split a part of it off for a few frames. A target seen outside is outside at once. The approach
+rule's closing speed is unknown (None) while the predictor coasts or is unsure of it (see
+server.alarms.snapshot); an unknown speed keeps the last value for `HOLD_S` (and does not count towards the
+rule's for_s). The
+approach rule has a deadband (ISA-18.2): it stays true until the speed falls under speed_mps −
+deadband_mps, so a target walking at about the threshold does not chatter.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
 MIN_HITS = 2
+HOLD_S = 2.0  # s: the tracker drops a track after 60 frames without a detection (2 s at 30 fps)
+REACQUIRE_M, REACQUIRE_MPS = 1.0, 2.0  # m, m/s: a walking person is under 2 m/s
+APPROACH_DEADBAND_MPS = 0.3  # m/s: the default deadband of an approach rule
 FAULT_SOURCES = ("camera", "frame_rate", "servo", "recording", "disk", "database")
 
 
@@ -52,6 +66,7 @@ class Snapshot:
     primary_id: int | None = None
     closing_mps: float | None = None
     faults: Mapping[str, str] = field(default_factory=dict)
+    servo_mode: str | None = None
 
 
 @dataclass(frozen=True)
@@ -88,6 +103,7 @@ class Approach:
     kind = "approach"
     speed_mps: float
     for_s: float = 0.0
+    deadband_mps: float = APPROACH_DEADBAND_MPS
 
 
 @dataclass(frozen=True)
@@ -158,7 +174,11 @@ def condition_from_dict(d: Mapping[str, Any]) -> Condition:
     if kind == "range_below":
         return RangeBelow(_num(d, "distance_m", None, 0.0))
     if kind == "approach":
-        return Approach(_num(d, "speed_mps", None, 0.0), _num(d, "for_s", 0.0, 0.0))
+        speed = _num(d, "speed_mps", None, 0.0)
+        band = _num(d, "deadband_mps", APPROACH_DEADBAND_MPS, 0.0)
+        if band > speed:
+            raise ValueError(f"condition: deadband_mps {band:g} is above speed_mps {speed:g}")
+        return Approach(speed, _num(d, "for_s", 0.0, 0.0), band)
     if kind == "size":
         s = Size(_num(d, "width_min", 0.0, 0.0), _opt(d, "width_max", math.inf),
                  _num(d, "height_min", 0.0, 0.0), _opt(d, "height_max", math.inf))
@@ -185,21 +205,48 @@ def condition_to_dict(c: Condition) -> dict[str, Any]:
 
 @dataclass
 class Memory:
-    """A rule's memory across snapshots: consecutive frames per track, dwell start per track, the time the
-    closing speed went above the threshold, the time the primary was last seen."""
+    """A rule's memory across snapshots, per track: frames seen, time last seen, the condition's value when
+    last seen, dwell start; and the time the closing speed went above the threshold (approach), when it
+    was last known, the time the primary was last seen (lost)."""
 
-    hits: dict[int, int] = field(default_factory=dict)
+    seen: dict[int, int] = field(default_factory=dict)
+    last_seen: dict[int, float] = field(default_factory=dict)
+    held: dict[int, bool] = field(default_factory=dict)
+    last_pos: dict[int, tuple[float, float, float]] = field(default_factory=dict)
     inside_since: dict[int, float] = field(default_factory=dict)
     fast_since: float | None = None
+    fast: bool = False
+    speed_known: float | None = None
     primary_seen: float | None = None
     value: bool = False
     target: int | None = None
 
 
-def confirmed(snap: Snapshot, mem: Memory) -> list[Target]:
-    """The snapshot's targets whose tracks were seen in MIN_HITS consecutive frames (updates mem.hits)."""
-    mem.hits = {p.track_id: mem.hits.get(p.track_id, 0) + 1 for p in snap.targets}
-    return [p for p in snap.targets if mem.hits[p.track_id] >= MIN_HITS]
+def per_target(snap: Snapshot, mem: Memory, test: Callable[[Target], bool]) -> list[int]:
+    """Track ids for which a condition holds, oldest holder first: a confirmed target of this frame by its
+    own value, a track not seen in this frame by the value it had when last seen, for HOLD_S."""
+    for p in snap.targets:
+        k = p.track_id
+        mem.seen[k] = mem.seen.get(k, 0) + 1
+        mem.last_seen[k] = snap.t
+        mem.held[k] = mem.seen[k] >= MIN_HITS and test(p)
+        mem.last_pos[k] = (p.x, p.y, p.z)
+    for k in [k for k, t in mem.last_seen.items() if t < snap.t and (snap.t - t > HOLD_S or _taken_up(snap, mem, k))]:
+        for d in (mem.seen, mem.last_seen, mem.held, mem.inside_since, mem.last_pos):
+            d.pop(k, None)
+    for k, v in mem.held.items():
+        if v:
+            mem.inside_since.setdefault(k, snap.t)
+        else:
+            mem.inside_since.pop(k, None)
+    return sorted((k for k, v in mem.held.items() if v), key=lambda k: mem.inside_since[k])
+
+
+def _taken_up(snap: Snapshot, mem: Memory, k: int) -> bool:
+    """Whether a track seen in this frame is where the missing track k could be by now."""
+    reach = REACQUIRE_M + REACQUIRE_MPS * (snap.t - mem.last_seen[k])
+    x, y, z = mem.last_pos[k]
+    return any(math.dist((p.x, p.y, p.z), (x, y, z)) <= reach for p in snap.targets)
 
 
 def evaluate(c: Condition, snap: Snapshot, mem: Memory) -> tuple[bool, int | None]:
@@ -214,25 +261,41 @@ def evaluate(c: Condition, snap: Snapshot, mem: Memory) -> tuple[bool, int | Non
 
 
 def _frame_value(c: Condition, snap: Snapshot, mem: Memory) -> tuple[bool, int | None]:
-    targets = confirmed(snap, mem)
     if isinstance(c, Zone):
-        inside = [p.track_id for p in targets if c.contains(p)]
-        mem.inside_since = {k: mem.inside_since.get(k, snap.t) for k in inside}
+        inside = per_target(snap, mem, c.contains)
         ok = [k for k in inside if snap.t - mem.inside_since[k] >= c.dwell_s]
         return (True, ok[0]) if ok else (False, None)
     if isinstance(c, RangeBelow):
-        near = [p for p in targets if p.r < c.distance_m]
-        return (True, min(near, key=lambda p: p.r).track_id) if near else (False, None)
+        near = per_target(snap, mem, lambda p: p.r < c.distance_m)
+        return (True, near[0]) if near else (False, None)
     if isinstance(c, Size):
-        fit = [p.track_id for p in targets if c.fits(p)]
+        fit = per_target(snap, mem, c.fits)
         return (True, fit[0]) if fit else (False, None)
     if isinstance(c, Approach):
-        fast = snap.closing_mps is not None and snap.closing_mps > c.speed_mps
-        mem.fast_since = (mem.fast_since if mem.fast_since is not None else snap.t) if fast else None
-        on = mem.fast_since is not None and snap.t - mem.fast_since >= c.for_s
-        return on, snap.primary_id if on else None
+        return _approach(c, snap, mem)
     assert isinstance(c, Lost)
-    if snap.primary_id is not None and any(p.track_id == snap.primary_id for p in targets):
+    if snap.primary_id is not None and any(p.track_id == snap.primary_id for p in snap.targets):
         mem.primary_seen = snap.t
         return False, None
     return mem.primary_seen is not None and snap.t - mem.primary_seen > c.after_s, None
+
+
+def _approach(c: Approach, snap: Snapshot, mem: Memory) -> tuple[bool, int | None]:
+    """Closing faster than speed_mps (until under speed_mps − deadband_mps) for for_s; an unknown speed
+    keeps the last value for HOLD_S but does not make for_s pass (a single fast sample followed by unknown
+    ones raises nothing)."""
+    v = snap.closing_mps
+    if v is None:
+        if mem.speed_known is None or snap.t - mem.speed_known > HOLD_S:
+            mem.fast, mem.fast_since = False, None
+            return False, None
+        return mem.value, mem.target
+    else:
+        mem.speed_known = snap.t
+        mem.fast = v > c.speed_mps or (mem.fast and v >= c.speed_mps - c.deadband_mps)
+        if not mem.fast:
+            mem.fast_since = None
+        elif mem.fast_since is None:
+            mem.fast_since = snap.t
+    on = mem.fast_since is not None and snap.t - mem.fast_since >= c.for_s
+    return on, snap.primary_id if on else None

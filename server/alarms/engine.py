@@ -1,12 +1,20 @@
 """The alarm engine (pure, no I/O): rules with on- and off-delays, the ISA-18.2 / IEC 62682 alarm
-lifecycle, timed shelving, out of service, and the flood state. `step(snapshot) -> transitions`.
+lifecycle, timed and one-shot shelving, suppression by design, out of service, and the flood state per
+operator (server.alarms.flood). `step(snapshot) -> transitions`.
 
 States of a rule's alarm (ISA-18.2 fig. 5): `normal`; `unack` (active, unacknowledged); `ack` (active,
-acknowledged); `rtn_unack` (returned to normal, unacknowledged); `shelved` (timed, with a reason, at
-most `max_shelve_s`); `out_of_service` (an admin took the rule out). An occurrence (one alarm in the
-list) runs from the activation out of `normal` until the alarm is `normal` again (acknowledged and
-cleared), or it is shelved or taken out of service. Silencing (the console's sound) is not
-acknowledging and is not the engine's business.
+acknowledged); `rtn_unack` (returned to normal, unacknowledged); `shelved` (with a reason: timed, at
+most `max_shelve_s`, or one-shot (OPC UA Part 9 OneShotShelve): until the alarm next clears, at most
+`max_shelve_s` too); `suppressed` (suppressed by design, see `design_suppression`); `out_of_service`
+(an admin took the rule out). An occurrence (one alarm in the list) runs from the activation out of
+`normal` until the alarm is `normal` again (acknowledged and cleared), or it is shelved out, suppressed
+or taken out of service. Silencing (the console's sound) is not acknowledging and is not the engine's
+business.
+
+Suppression by design on this console: a `lost` rule is suppressed while the mount is not in auto mode
+(manual, hold or home): the operator, not the tracker, points the cameras then, and a target that
+leaves the view is the operator's doing, not an abnormal situation. Its clock starts afresh when the
+mount is back in auto.
 
 Delays: the condition must hold for `on_delay_s` before the alarm activates and stay false for
 `off_delay_s` before it clears (chattering held back). Flood: more than `flood_on` new alarms in
@@ -16,12 +24,12 @@ Times are seconds on the caller's clock (non-decreasing).
 
 from __future__ import annotations
 
-from collections import deque
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from server.alarms.conditions import FAULT_SOURCES, Condition, Fault, Memory, Snapshot, evaluate
+from server.alarms.conditions import FAULT_SOURCES, Condition, Fault, Lost, Memory, Snapshot, evaluate
+from server.alarms.flood import CONSOLE, FloodMeter
 
 PRIORITIES = ("critical", "high", "medium", "low")
 FAULT_PRIORITY = {"camera": "critical", "frame_rate": "medium", "servo": "high", "recording": "high",
@@ -73,7 +81,8 @@ class Transition:
     target_id: int | None = None
     message: str | None = None
     priority: str | None = None
-    until: float | None = None  # shelved: the time the shelving ends
+    until: float | None = None  # shelved: the time the shelving ends (one-shot: at the latest)
+    one_shot: bool = False  # shelved: until the alarm next clears
 
     def as_dict(self) -> dict[str, Any]:
         return dict(vars(self))
@@ -92,17 +101,24 @@ class Point:
     occurrence: int | None = None
     shelved_until: float | None = None
     shelve_reason: str | None = None
+    one_shot: bool = False
+
+
+def design_suppression(rule: Rule, snap: Snapshot) -> str | None:
+    """Why the rule's alarm is suppressed by design at the snapshot (None: it is not)."""
+    if isinstance(rule.condition, Lost) and snap.servo_mode not in (None, "auto"):
+        return f"the mount is in {snap.servo_mode} mode: the operator points it"
+    return None
 
 
 class AlarmEngine:
     def __init__(self, rules: Iterable[Rule] = (), max_shelve_s: float = 8 * 3600.0, flood_window_s: float = 600.0,
                  flood_on: int = 10, flood_off: int = 5, builtin: bool = True):
         self.max_shelve_s = max_shelve_s
-        self.flood_window_s, self.flood_on, self.flood_off = flood_window_s, flood_on, flood_off
+        self.flood_window_s = flood_window_s
+        self.floods = FloodMeter(flood_window_s, flood_on, flood_off)
         self.points: dict[str, Point] = {r.key: Point(r) for r in (fault_rules() if builtin else [])}
         self._next = 1
-        self._new: deque[float] = deque()  # activation times inside the flood window
-        self.flood = False
         self.t = 0.0
         for r in rules:
             self.points[r.key] = Point(r)
@@ -132,8 +148,8 @@ class AlarmEngine:
             return []
         return [self._close(p, t, "removed", "normal", user)]
 
-    def restore(self, key: str, state: str, shelved_until: float | None = None, reason: str | None = None
-                ) -> int | None:
+    def restore(self, key: str, state: str, shelved_until: float | None = None, reason: str | None = None,
+                one_shot: bool = False) -> int | None:
         """Take back an open alarm kept from an earlier run (unack, ack, rtn_unack or shelved): its new
         occurrence number, or None when the rule is gone or the state is not an open one. The condition is
         evaluated afresh: an alarm whose condition no longer holds clears after its off-delay."""
@@ -144,6 +160,7 @@ class AlarmEngine:
         p.state, p.active = state, state != "rtn_unack"
         p.raw, p.raw_since = p.active, None
         p.shelved_until, p.shelve_reason = (shelved_until, reason) if state == "shelved" else (None, None)
+        p.one_shot = one_shot and state == "shelved"
         return p.occurrence
 
     # --- evaluation -----------------------------------------------------------------------------------
@@ -153,17 +170,42 @@ class AlarmEngine:
         out: list[Transition] = []
         for p in list(self.points.values()):
             raw, target = evaluate(p.rule.condition, snap, p.memory) if p.rule.enabled else (False, None)
-            if p.state == "out_of_service":
+            if p.state == "out_of_service" or self._suppress(p, snap, out):
                 continue
             if raw != p.raw or p.raw_since is None:
                 p.raw, p.raw_since = raw, snap.t
             if p.state == "shelved":
-                if p.shelved_until is not None and snap.t >= p.shelved_until:
-                    out += self._unshelve(p, snap.t, None, "shelving expired")
+                self._shelved(p, snap.t, out)
                 continue
             self._filter(p, snap, target, out)
         out += self._flood(snap.t)
         return out
+
+    def _suppress(self, p: Point, snap: Snapshot, out: list[Transition]) -> bool:
+        """Suppression by design: enter (an open occurrence ends) or leave it; True while suppressed and at
+        the snapshot that ends it."""
+        why = design_suppression(p.rule, snap)
+        if why is not None:
+            if p.state != "suppressed":
+                out.append(self._close(p, snap.t, "suppressed", "suppressed", None, why))
+            return True
+        if p.state == "suppressed":
+            p.state, p.raw, p.raw_since = "normal", False, None
+            if p.memory.primary_seen is not None:
+                p.memory.primary_seen = snap.t  # the lost rule's clock starts afresh
+            out.append(Transition("unsuppressed", snap.t, p.rule.key, None, "suppressed", "normal",
+                                  priority=p.rule.priority))
+            return True  # evaluated afresh from the next snapshot
+        return False
+
+    def _shelved(self, p: Point, t: float, out: list[Transition]) -> None:
+        """A shelved alarm: the timed shelving expires; a one-shot one ends when the alarm clears (the
+        condition false for the off-delay) or at the longest shelving."""
+        if p.one_shot and p.active and not p.raw and t - (p.raw_since or t) >= p.rule.off_delay_s:
+            p.active = False
+            out += self._unshelve(p, t, None, "one-shot shelving ended: the alarm cleared")
+        elif p.shelved_until is not None and t >= p.shelved_until:
+            out += self._unshelve(p, t, None, "shelving expired")
 
     def _filter(self, p: Point, snap: Snapshot, target: int | None, out: list[Transition]) -> None:
         held = snap.t - (p.raw_since if p.raw_since is not None else snap.t)
@@ -180,7 +222,7 @@ class AlarmEngine:
         if opened:
             p.occurrence = self._next
             self._next += 1
-            self._new.append(t)
+            self.floods.alarm(t)
         old, p.state = p.state, "unack" if p.state in ("normal", "rtn_unack") else p.state
         msg = faults.get(p.rule.condition.source) if isinstance(p.rule.condition, Fault) else None
         return Transition("activated", t, p.rule.key, p.occurrence, old, p.state, opened, frame=frame,
@@ -213,18 +255,25 @@ class AlarmEngine:
             p.occurrence = None
         return [tr]
 
-    def shelve(self, key: str, t: float, user: str | None, minutes: float, reason: str) -> list[Transition]:
+    def shelve(self, key: str, t: float, user: str | None, minutes: float | None, reason: str,
+               one_shot: bool = False) -> list[Transition]:
+        """Timed shelving for `minutes`, or one-shot (minutes None) until the alarm next clears."""
         p = self.point(key)
-        if not 0 < minutes * 60.0 <= self.max_shelve_s:
+        if one_shot != (minutes is None):
+            raise AlarmStateError("give minutes (timed shelving) or one_shot, not both")
+        if minutes is not None and not 0 < minutes * 60.0 <= self.max_shelve_s:
             raise AlarmStateError(f"minutes must be above 0 and at most {self.max_shelve_s / 60:g}")
         if not reason.strip():
             raise AlarmStateError("shelving needs a reason")
-        if p.state in ("normal", "out_of_service"):
+        if p.state in ("normal", "out_of_service", "suppressed", "shelved"):
             raise AlarmStateError(f"the alarm is {p.state.replace('_', ' ')}: nothing to shelve")
-        p.shelved_until, p.shelve_reason = t + minutes * 60.0, reason.strip()
+        if one_shot and not p.active:
+            raise AlarmStateError("the alarm has cleared: one-shot shelving lasts until an active alarm clears")
+        p.shelved_until = t + (self.max_shelve_s if minutes is None else minutes * 60.0)
+        p.shelve_reason, p.one_shot = reason.strip(), one_shot
         old, p.state = p.state, "shelved"
         return [Transition("shelved", t, key, p.occurrence, old, "shelved", user=user, comment=reason.strip(),
-                           priority=p.rule.priority, until=p.shelved_until)]
+                           priority=p.rule.priority, until=p.shelved_until, one_shot=one_shot)]
 
     def unshelve(self, key: str, t: float, user: str | None) -> list[Transition]:
         p = self.point(key)
@@ -235,6 +284,7 @@ class AlarmEngine:
     def _unshelve(self, p: Point, t: float, user: str | None, comment: str | None) -> list[Transition]:
         """Back from shelving: still active -> unacknowledged again; else the occurrence ends (normal)."""
         p.shelved_until = p.shelve_reason = None
+        p.one_shot = False
         p.active = p.raw and (t - (p.raw_since or t)) >= p.rule.on_delay_s
         p.state = "unack" if p.active else "normal"
         tr = Transition("unshelved", t, p.rule.key, p.occurrence, "shelved", p.state, user=user, comment=comment,
@@ -243,28 +293,33 @@ class AlarmEngine:
             p.occurrence = None
         return [tr]
 
-    def _close(self, p: Point, t: float, kind: str, state: str, user: str | None) -> Transition:
+    def _close(self, p: Point, t: float, kind: str, state: str, user: str | None, message: str | None = None
+               ) -> Transition:
         old = p.state
-        tr = Transition(kind, t, p.rule.key, p.occurrence, old, state, user=user, priority=p.rule.priority)
+        tr = Transition(kind, t, p.rule.key, p.occurrence, old, state, user=user, priority=p.rule.priority,
+                        message=message)
         p.state, p.occurrence, p.active = state, None, False
         p.shelved_until = p.shelve_reason = None
+        p.one_shot = False
         return tr
 
     # --- flood ----------------------------------------------------------------------------------------
+    def set_operators(self, since: Mapping[str, float]) -> None:
+        """The logged-in operators (username -> login time, s): the flood is counted per operator."""
+        self.floods.set_operators(since)
+
     def _flood(self, t: float) -> list[Transition]:
-        while self._new and self._new[0] <= t - self.flood_window_s:
-            self._new.popleft()
-        n = len(self._new)
-        if not self.flood and n > self.flood_on:
-            self.flood = True
-            return [Transition("flood", t, None, None, None, None, message=f"{n} new alarms in "
-                               f"{self.flood_window_s / 60:g} min")]
-        if self.flood and n < self.flood_off:
-            self.flood = False
-            return [Transition("flood_end", t, None, None, None, None, message=f"{n} new alarms in "
-                               f"{self.flood_window_s / 60:g} min")]
-        return []
+        return [Transition("flood" if c.flood else "flood_end", t, None, None, None, None,
+                           user=c.operator or None, message=f"{c.n} new alarms in {self.flood_window_s / 60:g} min")
+                for c in self.floods.step(t)]
 
     @property
-    def recent_count(self) -> int:
-        return len(self._new)
+    def flood(self) -> bool:
+        """Whether any operator (or the console, without operators) is in flood."""
+        return bool(self.floods.flooded)
+
+    def flooded(self, operator: str = CONSOLE) -> bool:
+        return operator in self.floods.flooded
+
+    def recent_count(self, operator: str = CONSOLE) -> int:
+        return self.floods.count(operator)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from sqlalchemy import JSON, BigInteger, Boolean, Float, ForeignKey, Index, Integer, String, Text
+from sqlalchemy import JSON, BigInteger, Boolean, Float, ForeignKey, Index, Integer, String, Text, false
 from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column
 
 
@@ -218,7 +218,9 @@ class Export(Base):
 
 class AlarmRule(Base):
     """An alarm rule made by an admin: a condition in metres (JSON, see server.alarms.conditions), a
-    priority (critical, high, medium, low), on- and off-delays (s), enabled and out-of-service flags."""
+    priority (critical, high, medium, low), on- and off-delays (s), enabled and out-of-service flags; or a
+    built-in device fault rule (builtin: its fault source), made at start-up, of which only the
+    out-of-service flag changes."""
 
     __tablename__ = "alarm_rules"
 
@@ -233,12 +235,13 @@ class AlarmRule(Base):
     created_at: Mapped[float] = mapped_column(Float)
     created_by: Mapped[int | None] = mapped_column(ForeignKey("users.id", ondelete="SET NULL"), nullable=True)
     updated_at: Mapped[float] = mapped_column(Float)
+    builtin: Mapped[str | None] = mapped_column(String(16), nullable=True)  # a device fault source: built in
 
 
 class Alarm(Base):
     """One alarm occurrence: from its activation until it is normal again (acknowledged and cleared),
     shelved out or taken out of service. rule_key: "rule:<id>" or "fault:<source>"; state: unack, ack,
-    rtn_unack, shelved, out_of_service or normal; run_id and target_id name the triggering track."""
+    rtn_unack, shelved, suppressed, out_of_service or normal; run_id and target_id name the triggering track."""
 
     __tablename__ = "alarms"
 
@@ -259,6 +262,7 @@ class Alarm(Base):
     message: Mapped[str | None] = mapped_column(Text, nullable=True)
     shelved_until: Mapped[float | None] = mapped_column(Float, nullable=True)
     shelve_reason: Mapped[str | None] = mapped_column(Text, nullable=True)
+    shelved_one_shot: Mapped[bool] = mapped_column(Boolean, default=False, server_default=false())
 
 
 class AlarmEvent(Base):

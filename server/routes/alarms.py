@@ -26,9 +26,10 @@ E404: dict[int | str, dict[str, Any]] = {404: {"model": Message}}
 EACT: dict[int | str, dict[str, Any]] = {404: {"model": Message}, 409: {"model": Message}, 422: {"model": Message}}
 
 
-@router.get("/alarm-rules", response_model=list[AlarmRuleOut], summary="Alarm rules")
-def list_rules(_p: Viewer, db: DbDep) -> list[dict[str, Any]]:
-    return [store.rule_json(r) for r in store.list_rules(db)]
+@router.get("/alarm-rules", response_model=list[AlarmRuleOut],
+            summary="Alarm rules, the built-in device fault rules with them, and the state of each one's alarm")
+def list_rules(ctx: CtxDep, _p: Viewer, db: DbDep) -> list[dict[str, Any]]:
+    return [ctx.alarms.rule_out(r) for r in store.list_rules(db)]
 
 
 @router.post("/alarm-rules", response_model=AlarmRuleOut, status_code=201, responses={422: {"model": Message}},
@@ -43,7 +44,8 @@ def patch_rule(rule_id: RowId, body: AlarmRulePatch, ctx: CtxDep, p: Admin, db: 
     return ctx.alarms.update_rule(db, p.user, addr, rule_id, body.model_dump(exclude_none=True))
 
 
-@router.delete("/alarm-rules/{rule_id}", status_code=204, responses=E404, summary="Delete a rule")
+@router.delete("/alarm-rules/{rule_id}", status_code=204, responses=E404 | {409: {"model": Message}},
+               summary="Delete a rule (not a built-in one)")
 def delete_rule(rule_id: RowId, ctx: CtxDep, p: Admin, db: DbDep, addr: Address) -> None:
     ctx.alarms.delete_rule(db, p.user, addr, rule_id)
 
@@ -60,8 +62,8 @@ def list_alarms(_p: Viewer, db: DbDep,
 
 
 @router.get("/alarms/summary", response_model=AlarmSummary, summary="Open alarms per priority, flood state")
-def summary(ctx: CtxDep, _p: Viewer) -> dict[str, Any]:
-    return ctx.alarms.summary()
+def summary(ctx: CtxDep, p: Viewer) -> dict[str, Any]:
+    return ctx.alarms.summary(p.user.username)
 
 
 @router.get("/alarms/{alarm_id}", response_model=AlarmDetail, responses=E404, summary="An alarm with its history")
@@ -75,11 +77,13 @@ def ack(alarm_id: RowId, body: AckRequest, ctx: CtxDep, p: Operator, db: DbDep, 
 
 
 @router.post("/alarms/{alarm_id}/shelve", response_model=AlarmOut, responses=EACT,
-             summary="Shelve for some minutes (at most 8 h by default), with a reason")
+             summary="Shelve for some minutes (at most 8 h by default) or one-shot (until it clears), with a reason")
 def shelve(alarm_id: RowId, body: ShelveRequest, ctx: CtxDep, p: Operator, db: DbDep, addr: Address) -> dict[str, Any]:
-    if body.minutes * 60.0 > ctx.settings.alarm_max_shelve_h * 3600.0:
+    if body.one_shot == (body.minutes is not None):
+        raise Invalid("give minutes (timed shelving) or one_shot true, one of the two")
+    if body.minutes is not None and body.minutes * 60.0 > ctx.settings.alarm_max_shelve_h * 3600.0:
         raise Invalid(f"minutes: at most {ctx.settings.alarm_max_shelve_h * 60:g} (the longest shelving)")
-    return ctx.alarms.shelve(db, p.user, addr, alarm_id, body.minutes, body.reason)
+    return ctx.alarms.shelve(db, p.user, addr, alarm_id, body.minutes, body.reason, body.one_shot)
 
 
 @router.post("/alarms/{alarm_id}/unshelve", response_model=AlarmOut, responses=EACT, summary="End the shelving")

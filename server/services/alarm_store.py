@@ -9,25 +9,52 @@ from typing import Any
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from server.alarms.conditions import condition_from_dict, condition_to_dict
-from server.alarms.engine import PRIORITIES, Rule, Transition
+from server.alarms.conditions import FAULT_SOURCES, Fault, condition_from_dict, condition_to_dict
+from server.alarms.engine import FAULT_NAMES, FAULT_PRIORITY, PRIORITIES, Rule, Transition
 from server.db.models import Alarm, AlarmEvent, AlarmRule, User
-from server.services.errors import Invalid, NotFound
+from server.services.errors import Conflict, Invalid, NotFound
 
 OPEN_STATES = ("unack", "ack", "rtn_unack", "shelved")
-STATES = (*OPEN_STATES, "out_of_service", "normal")
+STATES = (*OPEN_STATES, "suppressed", "out_of_service", "normal")
 RULE_FIELDS = ("name", "priority", "condition", "on_delay_s", "off_delay_s", "enabled", "out_of_service")
 
 
 def engine_rule(row: AlarmRule) -> Rule:
+    if row.builtin is not None:
+        return Rule(f"fault:{row.builtin}", row.name, row.priority, Fault(row.builtin),
+                    out_of_service=row.out_of_service)
     return Rule(f"rule:{row.id}", row.name, row.priority, condition_from_dict(row.condition), row.on_delay_s,
                 row.off_delay_s, row.enabled, row.out_of_service)
+
+
+def rule_key(row: AlarmRule) -> str:
+    return f"fault:{row.builtin}" if row.builtin is not None else f"rule:{row.id}"
 
 
 def rule_json(row: AlarmRule) -> dict[str, Any]:
     return {"id": row.id, "name": row.name, "priority": row.priority, "condition": row.condition,
             "on_delay_s": row.on_delay_s, "off_delay_s": row.off_delay_s, "enabled": row.enabled,
-            "out_of_service": row.out_of_service, "created_at": row.created_at, "updated_at": row.updated_at}
+            "out_of_service": row.out_of_service, "created_at": row.created_at, "updated_at": row.updated_at,
+            "built_in": row.builtin is not None}
+
+
+def ensure_builtin_rules(db: Session) -> None:
+    """A row for each built-in device fault rule that has none yet (always on; an admin may take one out of
+    service)."""
+    have = set(db.scalars(select(AlarmRule.builtin).where(AlarmRule.builtin.is_not(None))))
+    now = time.time()
+    for src in FAULT_SOURCES:
+        if src not in have:
+            db.add(AlarmRule(name=FAULT_NAMES[src], priority=FAULT_PRIORITY[src],
+                             condition={"kind": "fault", "source": src}, on_delay_s=0.0, off_delay_s=0.0,
+                             enabled=True, out_of_service=False, created_at=now, updated_at=now, builtin=src))
+    db.flush()
+
+
+def not_builtin(row: AlarmRule, what: str) -> None:
+    """Conflict when a built-in rule is asked for more than going out of service or back."""
+    if row.builtin is not None:
+        raise Conflict(f"rule {row.id} ({row.name}) is built in: {what}")
 
 
 def _checked(values: dict[str, Any]) -> dict[str, Any]:
@@ -65,6 +92,8 @@ def add_rule(db: Session, user: User, values: dict[str, Any]) -> AlarmRule:
 
 def patch_rule(db: Session, rule_id: int, values: dict[str, Any]) -> AlarmRule:
     row = get_rule(db, rule_id)
+    if set(values) - {"out_of_service"}:
+        not_builtin(row, "only out_of_service can change")
     for k, val in _checked(values).items():
         setattr(row, k, val)
     row.updated_at = time.time()
@@ -75,7 +104,8 @@ def patch_rule(db: Session, rule_id: int, values: dict[str, Any]) -> AlarmRule:
 def alarm_json(row: Alarm) -> dict[str, Any]:
     return {k: getattr(row, k) for k in ("id", "rule_id", "rule_key", "name", "priority", "state", "activated_at",
                                          "cleared_at", "acked_at", "acked_by", "updated_at", "frame", "target_id",
-                                         "run_id", "message", "shelved_until", "shelve_reason")}
+                                         "run_id", "message", "shelved_until", "shelve_reason",
+                                         "shelved_one_shot")}
 
 
 def event_json(ev: AlarmEvent) -> dict[str, Any]:
@@ -104,9 +134,9 @@ def store(db: Session, tr: Transition, alarm: Alarm | None, user: User | None, n
     elif tr.kind == "acknowledged":
         alarm.acked_at, alarm.acked_by = tr.t, None if user is None else user.username
     elif tr.kind == "shelved":
-        alarm.shelve_reason, alarm.shelved_until = tr.comment, tr.until
-    if tr.kind in ("unshelved", "out_of_service", "removed"):
-        alarm.shelved_until = None
+        alarm.shelve_reason, alarm.shelved_until, alarm.shelved_one_shot = tr.comment, tr.until, tr.one_shot
+    if tr.kind in ("unshelved", "out_of_service", "removed", "suppressed"):
+        alarm.shelved_until, alarm.shelved_one_shot = None, False
     db.add(AlarmEvent(alarm_id=alarm.id, at=tr.t, kind=tr.kind, state_from=tr.state_from, state_to=tr.state_to,
                       user_id=None if user is None else user.id, username=None if user is None else user.username,
                       comment=tr.comment, frame=tr.frame, target_id=tr.target_id, message=tr.message))

@@ -1,11 +1,14 @@
 """The alarm service: runs the pure engine (server.alarms.engine) on the runtime's published frames and on
 a periodic tick (device faults show even when no frame comes) in its own thread, off the event loop;
 stores every transition (alarm rows, their history, the audit log for operator actions) and pushes it to
-`/ws/events` clients as {"type": "alarm", "alarm": ..., "transition": ...}; the flood state goes out as
-{"type": "alarm_flood", ...}. Operator actions (ack, shelve, unshelve) and rule changes come from the
-routers' threads; one lock keeps the engine and the alarm rows in step. While the database cannot store
-(full, read-only, locked), evaluated transitions wait in memory and are stored, with their own times, once it
-can; an operator action or rule change that cannot be stored is undone in the engine (the API answers 503)."""
+`/ws/events` clients as {"type": "alarm", "alarm": ..., "transition": ...}; an operator's flood state goes
+out as {"type": "alarm_flood", "flood", "message", "operator"}. The flood is counted per logged-in
+operator (server.alarms.flood): the users of role operator or admin with a live session, each from their
+earliest live login, looked up every probe_s. Operator actions (ack, shelve, unshelve) and rule changes come
+from the routers' threads; one lock keeps the engine and the alarm rows in step. While the database cannot
+store (full, read-only, locked), evaluated transitions wait in memory and are stored, with their own times,
+once it can; an operator action or rule change that cannot be stored is undone in the engine (the API
+answers 503)."""
 
 from __future__ import annotations
 
@@ -21,14 +24,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from sqlalchemy import text
+from sqlalchemy import select, text
 from sqlalchemy.orm import Session, sessionmaker
 
 from server.alarms.conditions import Snapshot
 from server.alarms.engine import PRIORITIES, AlarmEngine, AlarmStateError, Rule, Transition
 from server.alarms.faults import FaultThresholds, Health, device_faults
 from server.alarms.snapshot import snapshot_from
-from server.db.models import Alarm, User
+from server.db.models import Alarm, AlarmRule, AuthSession, User
 from server.services import alarm_store as store
 from server.services import audit
 from server.services.errors import Conflict, NotFound
@@ -74,16 +77,19 @@ class AlarmService:
         self._unstored: list[Transition] = []
         self._store_at = 0.0
         self._store_failures = 0
+        self._operators: dict[str, float] | None = None
         self._last_t = 0.0
 
     # --- life cycle ----------------------------------------------------------------------------------
     def start(self) -> None:
         """Load the rules and the open alarms of an earlier run, then start evaluating."""
         with self.sessions() as db:
+            store.ensure_builtin_rules(db)
             for row in store.list_rules(db):
                 self.engine.set_rule(store.engine_rule(row), time.time())
+            self.engine.set_operators(self._logged_in(db, time.time()))
             for a in store.open_alarms(db):
-                occ = self.engine.restore(a.rule_key, a.state, a.shelved_until, a.shelve_reason)
+                occ = self.engine.restore(a.rule_key, a.state, a.shelved_until, a.shelve_reason, a.shelved_one_shot)
                 if occ is None:
                     a.state, a.updated_at = "normal", time.time()
                 else:
@@ -125,21 +131,41 @@ class AlarmService:
             self._probed_at = now
             self._disk = _free_bytes(self.data_dir)
             self._db_fault = self._probe_db()
+            if self._db_fault is None:
+                with self.sessions() as session:
+                    self._operators = self._logged_in(session, now)
         db = self._write_fault or self._db_fault or _probe(self.probes.get("database"))
         return Health(now, rt.state, rt.error, rt.source_fault, None if latest is None else latest.done_at,
                       now - self._started, rate, None if latest is None or latest.servo is None else latest.servo.fault,
                       _probe(self.probes.get("recording")), db, self._disk)
 
+    @staticmethod
+    def _logged_in(db: Session, now: float) -> dict[str, float]:
+        """Operators (role operator or admin, not disabled) with a live session -> their earliest login."""
+        rows = db.execute(select(User.username, AuthSession.created_at)
+                          .join(AuthSession, AuthSession.user_id == User.id)
+                          .where(AuthSession.revoked_at.is_(None), AuthSession.expires_at > now,
+                                 User.role.in_(("operator", "admin")), User.disabled.is_(False)))
+        out: dict[str, float] = {}
+        for name, at in rows:
+            out[name] = min(at, out.get(name, at))
+        return out
+
     def _evaluate(self, ev: FrameEvent | None) -> None:
         now = time.time()
         faults = device_faults(self.health(now), self.opt.thresholds)
+        latest = self.runtime.latest if ev is None else ev
+        mode = None if latest is None or latest.servo is None else latest.servo.mode
         if ev is not None:
             snap = snapshot_from(max(ev.captured_at, self._last_t), ev.frame_no, ev.telemetry, ev.step,
-                                 self.runtime.config.origin, faults)
+                                 self.runtime.config.origin, faults, mode)
         else:
-            snap = Snapshot(max(now, self._last_t), None, faults=faults)
+            snap = Snapshot(max(now, self._last_t), None, faults=faults, servo_mode=mode)
         self._last_t = snap.t
         with self.lock:
+            if self._operators is not None:
+                self.engine.set_operators(self._operators)
+                self._operators = None
             trs = self.engine.step(snap)
             self._unstored = (self._unstored + trs)[-MAX_UNSTORED:]
             if self._unstored and time.monotonic() >= self._store_at:
@@ -169,14 +195,15 @@ class AlarmService:
         try:
             for tr in trs:
                 if tr.kind in ("flood", "flood_end"):
-                    audit.record(session, None, None, f"alarm.{tr.kind}", None, {"message": tr.message})
+                    audit.record(session, None, None, f"alarm.{tr.kind}", tr.user and f"operator {tr.user}",
+                                 {"message": tr.message})
                     pushed.append((tr.as_dict(), None))
                     continue
                 row = self._row(session, tr)
                 alarm = store.store(session, tr, row, user, self._name(tr), self.run_id())
                 if alarm is None:
                     continue
-                if tr.occurrence is not None and tr.state_to in ("normal", "out_of_service"):
+                if tr.occurrence is not None and tr.state_to in ("normal", "out_of_service", "suppressed"):
                     self.rows.pop(tr.occurrence, None)  # the occurrence ended: its row no longer changes
                 elif tr.occurrence is not None:
                     self.rows[tr.occurrence] = alarm.id
@@ -210,7 +237,8 @@ class AlarmService:
         if self.events is None:
             return
         if alarm is None:
-            self.events.publish_threadsafe("alarm_flood", flood=tr["kind"] == "flood", message=tr["message"])
+            self.events.publish_threadsafe("alarm_flood", flood=tr["kind"] == "flood", message=tr["message"],
+                                           operator=tr["user"])
         else:
             self.events.publish_threadsafe("alarm", alarm=alarm, transition=tr)
 
@@ -256,10 +284,10 @@ class AlarmService:
     def ack(self, db: Session, user: User, address: str, alarm_id: int, comment: str | None) -> dict[str, Any]:
         return self.act(db, user, address, alarm_id, lambda k, t: self.engine.ack(k, t, user.username, comment))
 
-    def shelve(self, db: Session, user: User, address: str, alarm_id: int, minutes: float,
-               reason: str) -> dict[str, Any]:
+    def shelve(self, db: Session, user: User, address: str, alarm_id: int, minutes: float | None,
+               reason: str, one_shot: bool = False) -> dict[str, Any]:
         return self.act(db, user, address, alarm_id,
-                        lambda k, t: self.engine.shelve(k, t, user.username, minutes, reason))
+                        lambda k, t: self.engine.shelve(k, t, user.username, minutes, reason, one_shot))
 
     def unshelve(self, db: Session, user: User, address: str, alarm_id: int) -> dict[str, Any]:
         return self.act(db, user, address, alarm_id, lambda k, t: self.engine.unshelve(k, t, user.username))
@@ -280,25 +308,36 @@ class AlarmService:
         row = store.add_rule(db, user, values)
         audit.record(db, user, address, "alarm_rule.create", f"rule {row.id}", {"name": row.name})
         self.rule_changed(db, store.engine_rule(row), user, address)
-        return store.rule_json(row)
+        return self.rule_out(row)
 
     def update_rule(self, db: Session, user: User, address: str, rule_id: int, values: dict[str, Any]
                     ) -> dict[str, Any]:
         row = store.patch_rule(db, rule_id, values)
         audit.record(db, user, address, "alarm_rule.update", f"rule {row.id}", values)
         self.rule_changed(db, store.engine_rule(row), user, address)
-        return store.rule_json(row)
+        return self.rule_out(row)
 
     def delete_rule(self, db: Session, user: User, address: str, rule_id: int) -> None:
         row = store.get_rule(db, rule_id)
+        store.not_builtin(row, "it cannot be deleted; take it out of service instead")
         audit.record(db, user, address, "alarm_rule.delete", f"rule {row.id}", {"name": row.name})
         with self.lock, self._undo_on_failure():
             trs = self.engine.remove_rule(f"rule:{rule_id}", time.time(), user.username)
             db.delete(row)
             self._commit(trs, user, address, db)
 
-    def summary(self) -> dict[str, Any]:
-        """Open alarms by priority, unacknowledged ones by priority, and the flood state."""
+    def rule_out(self, row: AlarmRule) -> dict[str, Any]:
+        """A rule's JSON with the state of its alarm."""
+        return {**store.rule_json(row), "state": self.rule_state(store.rule_key(row))}
+
+    def rule_state(self, row_key: str) -> str | None:
+        """The state of a rule's alarm in the engine (normal, unack, ..., suppressed, out_of_service)."""
+        with self.lock:
+            p = self.engine.points.get(row_key)
+            return None if p is None else p.state
+
+    def summary(self, operator: str) -> dict[str, Any]:
+        """Open alarms by priority, unacknowledged ones by priority, and `operator`'s flood state."""
         counts = dict.fromkeys(PRIORITIES, 0)
         unack = dict.fromkeys(PRIORITIES, 0)
         with self.lock:
@@ -308,8 +347,9 @@ class AlarmService:
                 counts[p.rule.priority] += 1
                 if p.state in ("unack", "rtn_unack"):
                     unack[p.rule.priority] += 1
-            return {"open": counts, "unacknowledged": unack, "flood": self.engine.flood,
-                    "new_in_window": self.engine.recent_count, "window_s": self.engine.flood_window_s}
+            return {"open": counts, "unacknowledged": unack, "flood": self.engine.flooded(operator),
+                    "new_in_window": self.engine.recent_count(operator), "window_s": self.engine.flood_window_s,
+                    "flooded_operators": sorted(self.engine.floods.flooded)}
 
 
 def counter_probe(count: Callable[[], int], what: str, hold_s: float = 10.0) -> Probe:

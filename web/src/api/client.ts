@@ -166,6 +166,9 @@ export const api = {
   ackAlarm: (id: number, comment: string | null) => post<AlarmOut>(`/api/alarms/${id}/ack`, { comment }),
   shelveAlarm: (id: number, minutes: number, reason: string) =>
     post<AlarmOut>(`/api/alarms/${id}/shelve`, { minutes, reason }),
+  /** One-shot shelving: until the (active) alarm next clears. */
+  shelveAlarmOneShot: (id: number, reason: string) =>
+    post<AlarmOut>(`/api/alarms/${id}/shelve`, { one_shot: true, reason }),
   unshelveAlarm: (id: number) => post<AlarmOut>(`/api/alarms/${id}/unshelve`),
   alarmRules: () => get<AlarmRuleOut[]>("/api/alarm-rules"),
   createAlarmRule: (b: AlarmRuleIn) => post<AlarmRuleOut>("/api/alarm-rules", b),

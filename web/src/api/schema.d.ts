@@ -699,7 +699,7 @@ export interface paths {
             path?: never;
             cookie?: never;
         };
-        /** Alarm rules */
+        /** Alarm rules, the built-in device fault rules with them, and the state of each one's alarm */
         get: operations["list_rules_api_alarm_rules_get"];
         put?: never;
         /** Create a rule (zone, range_below, approach, size or lost) */
@@ -720,7 +720,7 @@ export interface paths {
         get?: never;
         put?: never;
         post?: never;
-        /** Delete a rule */
+        /** Delete a rule (not a built-in one) */
         delete: operations["delete_rule_api_alarm_rules__rule_id__delete"];
         options?: never;
         head?: never;
@@ -805,7 +805,7 @@ export interface paths {
         };
         get?: never;
         put?: never;
-        /** Shelve for some minutes (at most 8 h by default), with a reason */
+        /** Shelve for some minutes (at most 8 h by default) or one-shot (until it clears), with a reason */
         post: operations["shelve_api_alarms__alarm_id__shelve_post"];
         delete?: never;
         options?: never;
@@ -900,6 +900,7 @@ export interface components {
          *       "rule_id": 1,
          *       "rule_key": "rule:1",
          *       "run_id": "20261122T220000-123.0",
+         *       "shelved_one_shot": false,
          *       "state": "unack",
          *       "target_id": 3,
          *       "updated_at": 1795000000.1
@@ -926,7 +927,7 @@ export interface components {
              * State
              * @enum {string}
              */
-            state: "unack" | "ack" | "rtn_unack" | "shelved" | "out_of_service" | "normal";
+            state: "unack" | "ack" | "rtn_unack" | "shelved" | "suppressed" | "out_of_service" | "normal";
             /** Activated At */
             activated_at: number;
             /** Cleared At */
@@ -951,10 +952,18 @@ export interface components {
             run_id: string | null;
             /** Message */
             message: string | null;
-            /** Shelved Until */
+            /**
+             * Shelved Until
+             * @description when the shelving ends (one-shot: at the latest)
+             */
             shelved_until: number | null;
             /** Shelve Reason */
             shelve_reason: string | null;
+            /**
+             * Shelved One Shot
+             * @description shelved until the alarm next clears (OPC UA one-shot shelving)
+             */
+            shelved_one_shot: boolean;
             /** History */
             history: components["schemas"]["AlarmEventOut"][];
             /**
@@ -976,7 +985,7 @@ export interface components {
             at: number;
             /**
              * Kind
-             * @description activated, cleared, acknowledged, shelved, unshelved, out_of_service, removed
+             * @description activated, cleared, acknowledged, shelved, unshelved, suppressed, out_of_service, removed
              */
             kind: string;
             /** State From */
@@ -1008,6 +1017,7 @@ export interface components {
          *       "rule_id": 1,
          *       "rule_key": "rule:1",
          *       "run_id": "20261122T220000-123.0",
+         *       "shelved_one_shot": false,
          *       "state": "unack",
          *       "target_id": 3,
          *       "updated_at": 1795000000.1
@@ -1034,7 +1044,7 @@ export interface components {
              * State
              * @enum {string}
              */
-            state: "unack" | "ack" | "rtn_unack" | "shelved" | "out_of_service" | "normal";
+            state: "unack" | "ack" | "rtn_unack" | "shelved" | "suppressed" | "out_of_service" | "normal";
             /** Activated At */
             activated_at: number;
             /** Cleared At */
@@ -1059,10 +1069,18 @@ export interface components {
             run_id: string | null;
             /** Message */
             message: string | null;
-            /** Shelved Until */
+            /**
+             * Shelved Until
+             * @description when the shelving ends (one-shot: at the latest)
+             */
             shelved_until: number | null;
             /** Shelve Reason */
             shelve_reason: string | null;
+            /**
+             * Shelved One Shot
+             * @description shelved until the alarm next clears (OPC UA one-shot shelving)
+             */
+            shelved_one_shot: boolean;
         };
         /**
          * AlarmRuleIn
@@ -1139,6 +1157,16 @@ export interface components {
             created_at: number;
             /** Updated At */
             updated_at: number;
+            /**
+             * Built In
+             * @description a built-in device fault rule: read-only but for out_of_service, not deletable
+             */
+            built_in: boolean;
+            /**
+             * State
+             * @description the state of the rule's alarm now (suppressed: by design)
+             */
+            state: ("unack" | "ack" | "rtn_unack" | "shelved" | "suppressed" | "out_of_service" | "normal") | null;
         };
         /** AlarmRulePatch */
         AlarmRulePatch: {
@@ -1175,17 +1203,26 @@ export interface components {
             };
             /**
              * Flood
-             * @description more than 10 new alarms in 10 minutes (ends below 5)
+             * @description the caller's flood: more than 10 new alarms in 10 minutes since they logged in (ends below 5)
              */
             flood: boolean;
-            /** New In Window */
+            /**
+             * New In Window
+             * @description new alarms in the window since the caller logged in
+             */
             new_in_window: number;
             /** Window S */
             window_s: number;
+            /**
+             * Flooded Operators
+             * @description the logged-in operators in flood
+             */
+            flooded_operators: string[];
         };
         /**
          * ApproachCondition
-         * @description Closing speed −dr/dt of the primary target (from the predictor) above speed_mps for for_s.
+         * @description Closing speed −dr/dt of the primary target (from the predictor) above speed_mps for for_s; it stays
+         *     true until the speed falls under speed_mps − deadband_mps (ISA-18.2 deadband, against chattering).
          */
         ApproachCondition: {
             /**
@@ -1200,6 +1237,11 @@ export interface components {
              * @default 0
              */
             for_s: number;
+            /**
+             * Deadband Mps
+             * @default 0.3
+             */
+            deadband_mps: number;
         };
         /** AuditOut */
         AuditOut: {
@@ -1616,7 +1658,8 @@ export interface components {
         };
         /**
          * LostCondition
-         * @description The primary target not seen for longer than after_s.
+         * @description The primary target not seen for longer than after_s. Suppressed by design while the mount is not in
+         *     auto mode (manual, hold or home: the operator points it).
          */
         LostCondition: {
             /**
@@ -1888,11 +1931,17 @@ export interface components {
         ShelveRequest: {
             /**
              * Minutes
-             * @description how long; at most the server's limit (8 h by default)
+             * @description timed shelving: how long; at most the server's limit (8 h by default)
              */
-            minutes: number;
+            minutes?: number | null;
             /** Reason */
             reason: string;
+            /**
+             * One Shot
+             * @description instead of minutes: shelved until the alarm next clears (an active alarm), at most the server's limit
+             * @default false
+             */
+            one_shot: boolean;
         };
         /**
          * SizeCondition
@@ -4294,6 +4343,15 @@ export interface operations {
             };
             /** @description Not Found */
             404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+            /** @description Conflict */
+            409: {
                 headers: {
                     [name: string]: unknown;
                 };

@@ -105,9 +105,12 @@ export class AlarmCenter {
 
   private onEvent(ev: ServerEvent): void {
     if (ev.type === "alarm_flood") {
-      this.flood = Boolean(ev.flood);
+      // the flood is counted per operator: the summary says whether this user is in flood
       this.floodMessage = String(ev.message ?? "");
-      this.emit();
+      void api.alarmSummary().then((s) => {
+        this.flood = s.flood;
+        this.emit();
+      }, () => undefined);
       return;
     }
     if (ev.type !== "alarm") return;

@@ -1,5 +1,5 @@
 // Alarm rules for admins (part of the Alarms page): the list with enabled / out-of-service switches and
-// delete, and a form for a new rule whose fields follow the chosen condition (metres, m/s, seconds).
+// delete (the built-in device fault rules: out of service only), each rule's alarm state, and a form for a new rule whose fields follow the chosen condition (metres, m/s, seconds).
 import { api, ApiError } from "../api/client";
 import type { AlarmRuleIn, AlarmRuleOut, Priority } from "../api/types";
 import { PRIORITIES } from "../lib/alarms";
@@ -16,7 +16,8 @@ const KINDS: Record<string, [string, string, boolean][]> = {
     ["radius", "radius (m)", true], ["y_min", "y min (m, down)", false], ["y_max", "y max (m)", false],
     ["dwell_s", "dwell (s)", false]],
   range_below: [["distance_m", "closer than (m)", true]],
-  approach: [["speed_mps", "closing faster than (m/s)", true], ["for_s", "for at least (s)", false]],
+  approach: [["speed_mps", "closing faster than (m/s)", true], ["for_s", "for at least (s)", false],
+    ["deadband_mps", "deadband (m/s, default 0.3)", false]],
   size: [["width_min", "width min (m)", false], ["width_max", "width max (m)", false],
     ["height_min", "height min (m)", false], ["height_max", "height max (m)", false]],
   lost: [["after_s", "lost for longer than (s)", true]],
@@ -29,7 +30,7 @@ export function describeCondition(c: Record<string, unknown>): string {
 export function rulesPanel(msg: Notice): HTMLElement {
   const tbody = h("tbody");
   const table = h("table", { class: "data", "data-testid": "rule-table" }, h("caption", { class: "sr-only" }, "Alarm rules"),
-    h("thead", null, h("tr", null, ...["Rule", "Priority", "Condition", "On / off delay", "Enabled", "Out of service", ""]
+    h("thead", null, h("tr", null, ...["Rule", "Priority", "Condition", "On / off delay", "State", "Enabled", "Out of service", ""]
       .map((c) => h("th", { scope: "col" }, c)))), tbody);
   const name = h("input", { name: "rule-name", required: true, maxLength: 128 });
   const prio = h("select", { name: "rule-priority" }, ...PRIORITIES.map((p) => h("option", { value: p }, p)));
@@ -64,14 +65,17 @@ export function rulesPanel(msg: Notice): HTMLElement {
       return;
     }
     tbody.replaceChildren(...rules.map((r) => {
-      const en = h("input", { type: "checkbox", checked: r.enabled, "aria-label": `${r.name} enabled` });
+      const en = h("input", { type: "checkbox", checked: r.enabled, disabled: r.built_in, "aria-label": `${r.name} enabled` });
       const oos = h("input", { type: "checkbox", checked: r.out_of_service, "aria-label": `${r.name} out of service` });
       en.addEventListener("change", () => void patch(r, { enabled: en.checked }));
       oos.addEventListener("change", () => void patch(r, { out_of_service: oos.checked }));
-      const del = h("button", { type: "button", onclick: () => void remove(r) }, "Delete");
-      return h("tr", { "data-rule": String(r.id) }, h("td", null, r.name), h("td", { class: `prio-${r.priority}` }, r.priority),
+      const del = r.built_in ? h("span", { class: "muted" }, "built in")
+        : h("button", { type: "button", onclick: () => void remove(r) }, "Delete");
+      return h("tr", { "data-rule": String(r.id), "data-built-in": String(r.built_in) }, h("td", null, r.name),
+        h("td", { class: `prio-${r.priority}` }, r.priority),
         h("td", null, `${r.condition.kind}: ${describeCondition(r.condition)}`),
-        h("td", null, `${r.on_delay_s} s / ${r.off_delay_s} s`), h("td", null, en), h("td", null, oos), h("td", null, del));
+        h("td", null, `${r.on_delay_s} s / ${r.off_delay_s} s`), h("td", null, (r.state ?? "—").replace(/_/g, " ")),
+        h("td", null, en), h("td", null, oos), h("td", null, del));
     }));
   }
 

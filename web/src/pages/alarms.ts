@@ -1,6 +1,6 @@
 // The Alarms page: open and shelved alarms sorted by priority then time (kept current from /ws/events),
-// or every alarm of the last day; acknowledge with a comment, shelve for some minutes with a reason,
-// unshelve (operator), each alarm's history with who did what, a link to its playback; the rules
+// or every alarm of the last day; acknowledge with a comment, shelve for some minutes or until the alarm
+// clears (one-shot) with a reason, unshelve (operator), each alarm's history with who did what, a link to its playback; the rules
 // (admin: create, enable, take out of service, delete).
 import { api, ApiError } from "../api/client";
 import type { AlarmOut } from "../api/types";
@@ -12,7 +12,8 @@ import { rulesPanel } from "./alarm_rules";
 import type { Page, PageContext } from "./types";
 
 const STATE_TEXT: Record<string, string> = { unack: "active, unacknowledged", ack: "active, acknowledged",
-  rtn_unack: "cleared, unacknowledged", shelved: "shelved", out_of_service: "out of service", normal: "normal" };
+  rtn_unack: "cleared, unacknowledged", shelved: "shelved", suppressed: "suppressed by design",
+  out_of_service: "out of service", normal: "normal" };
 
 interface Row {
   tr: HTMLTableRowElement;
@@ -60,6 +61,9 @@ export function alarmsPage(ctx: PageContext): Page {
       "aria-label": `Reason for shelving alarm ${a.id}` });
     const shelve = h("button", { type: "button", onclick: () => void run(`Shelve alarm ${a.id}`,
       () => api.shelveAlarm(a.id, Number(minutes.value), reason.value.trim())) }, "Shelve");
+    const oneShot = h("button", { type: "button", title: "Shelved until the alarm clears",
+      onclick: () => void run(`Shelve alarm ${a.id} until it clears`,
+        () => api.shelveAlarmOneShot(a.id, reason.value.trim())) }, "Shelve until cleared");
     const unshelve = h("button", { type: "button", onclick: () => void run(`Unshelve alarm ${a.id}`,
       () => api.unshelveAlarm(a.id)) }, "Unshelve");
     const history = h("ol", { class: "alarm-history", hidden: true, "aria-label": `History of alarm ${a.id}` });
@@ -67,7 +71,7 @@ export function alarmsPage(ctx: PageContext): Page {
       onclick: () => void showHistory() }, "History");
     const playback = h("button", { type: "button", class: "link", onclick: () => void api.alarm(a.id).then(
       (d) => { location.hash = d.playback_url; }, (e) => fail("Playback link", e)) }, "Playback");
-    const actions = h("div", { class: "alarm-actions" }, canAct ? [comment, ack, minutes, reason, shelve, unshelve] : null,
+    const actions = h("div", { class: "alarm-actions" }, canAct ? [comment, ack, minutes, reason, shelve, oneShot, unshelve] : null,
       toggle, playback);
     const tr = h("tr", { "data-alarm": String(a.id) }, ...cells, h("td", null, actions, history));
 
@@ -92,7 +96,8 @@ export function alarmsPage(ctx: PageContext): Page {
     function update(next: AlarmOut): void {
       a = next;
       tr.dataset.state = a.state;
-      const texts = [a.priority, `${a.name}${a.message ? ` — ${a.message}` : ""}`, STATE_TEXT[a.state] ?? a.state,
+      const state = (STATE_TEXT[a.state] ?? a.state) + (a.state === "shelved" && a.shelved_one_shot ? " until it clears" : "");
+      const texts = [a.priority, `${a.name}${a.message ? ` — ${a.message}` : ""}`, state,
         time(a.activated_at), a.cleared_at ? time(a.cleared_at) : "—", a.target_id != null ? `#${a.target_id}` : "—",
         a.acked_by ? `${a.acked_by}, ${time(a.acked_at)}` : "—"];
       texts.forEach((t, i) => { cells[i].textContent = t; });
@@ -100,6 +105,7 @@ export function alarmsPage(ctx: PageContext): Page {
       const unack = a.state === "unack" || a.state === "rtn_unack";
       ack.disabled = comment.disabled = !unack;
       shelve.disabled = minutes.disabled = reason.disabled = !(unack || a.state === "ack");
+      oneShot.disabled = !(a.state === "unack" || a.state === "ack");
       unshelve.hidden = a.state !== "shelved";
       if (!history.hidden) void loadHistory();
     }
