@@ -119,4 +119,34 @@ class ExportOut(BaseModel):
     finished_at: float | None
 
 
+class ReplayIn(Strict):
+    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
+        {"start": 1795376480.0, "end": 1795376540.0, "threshold": 16, "calibration_id": None}]})
+
+    start: float = Field(allow_inf_nan=False, description="Unix s")
+    end: float = Field(allow_inf_nan=False, description="Unix s")
+    threshold: int | None = Field(None, ge=1, le=254, description="eq. (9) threshold ε in grey levels "
+                                  "(default: the live one)")
+    calibration_id: int | None = Field(None, ge=1, description="replay with this calibration's rig "
+                                       "(default: the live rig)")
+
+
+class ReplayOut(BaseModel):
+    model_config = ConfigDict(from_attributes=True)
+
+    id: int
+    status: Literal["queued", "running", "done", "failed"]
+    progress: float = Field(description="0 to 1")
+    start: float
+    end: float
+    settings: dict[str, Any] = Field(description="threshold, rig, background (and the simulated scene)")
+    frames: int = Field(description="stereo pairs replayed")
+    agreement: dict[str, Any] | None = Field(description="against the live detections of the same frames: "
+                                             "frames, same_count and same_detected (fractions), both_detected, "
+                                             "range_diff_median_m, range_diff_p95_m")
+    error: str | None
+    created_at: float
+    finished_at: float | None
+
+
 TelemetryRecord = dict[str, Any]
