@@ -692,6 +692,41 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/replays": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /** Replays, newest first */
+        get: operations["list_replays_api_replays_get"];
+        put?: never;
+        /** Re-run the tracker on the recordings of start..end (threshold, rig); its tracks are stored apart */
+        post: operations["create_replay_api_replays_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/replays/{replay_id}": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /** A replay's status, progress and agreement with the live result */
+        get: operations["replay_status_api_replays__replay_id__get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/api/alarm-rules": {
         parameters: {
             query?: never;
@@ -1761,6 +1796,80 @@ export interface components {
             telemetry_missing: number;
         };
         /**
+         * ReplayIn
+         * @example {
+         *       "end": 1795376540,
+         *       "start": 1795376480,
+         *       "threshold": 16
+         *     }
+         */
+        ReplayIn: {
+            /**
+             * Start
+             * @description Unix s
+             */
+            start: number;
+            /**
+             * End
+             * @description Unix s
+             */
+            end: number;
+            /**
+             * Threshold
+             * @description eq. (9) threshold ε in grey levels (default: the live one)
+             */
+            threshold?: number | null;
+            /**
+             * Calibration Id
+             * @description replay with this calibration's rig (default: the live rig)
+             */
+            calibration_id?: number | null;
+        };
+        /** ReplayOut */
+        ReplayOut: {
+            /** Id */
+            id: number;
+            /**
+             * Status
+             * @enum {string}
+             */
+            status: "queued" | "running" | "done" | "failed";
+            /**
+             * Progress
+             * @description 0 to 1
+             */
+            progress: number;
+            /** Start */
+            start: number;
+            /** End */
+            end: number;
+            /**
+             * Settings
+             * @description threshold, rig, background (and the simulated scene)
+             */
+            settings: {
+                [key: string]: unknown;
+            };
+            /**
+             * Frames
+             * @description stereo pairs replayed
+             */
+            frames: number;
+            /**
+             * Agreement
+             * @description against the live detections of the same frames: frames, same_count and same_detected (fractions), both_detected, range_diff_median_m, range_diff_p95_m
+             */
+            agreement: {
+                [key: string]: unknown;
+            } | null;
+            /** Error */
+            error: string | null;
+            /** Created At */
+            created_at: number;
+            /** Finished At */
+            finished_at: number | null;
+        };
+        /**
          * SegmentOut
          * @example {
          *       "bytes": 1893321,
@@ -2105,6 +2214,11 @@ export interface components {
             height_m: number | null;
             /** Min Range M */
             min_range_m: number | null;
+            /**
+             * Replay Id
+             * @description the replay that found it (None: seen live)
+             */
+            replay_id?: number | null;
             /** Trajectory */
             trajectory: components["schemas"]["TrackPointOut"][];
         };
@@ -2130,6 +2244,11 @@ export interface components {
             height_m: number | null;
             /** Min Range M */
             min_range_m: number | null;
+            /**
+             * Replay Id
+             * @description the replay that found it (None: seen live)
+             */
+            replay_id?: number | null;
         };
         /** TrackPointOut */
         TrackPointOut: {
@@ -2923,6 +3042,8 @@ export interface operations {
                 /** @description Unix s */
                 end?: number | null;
                 limit?: number;
+                /** @description a replay's tracks (default: the live ones) */
+                replay?: number | null;
             };
             header?: never;
             path?: never;
@@ -4193,6 +4314,109 @@ export interface operations {
             };
             /** @description Conflict */
             409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+            /** @description Validation Error */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["HTTPValidationError"];
+                };
+            };
+        };
+    };
+    list_replays_api_replays_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ReplayOut"][];
+                };
+            };
+        };
+    };
+    create_replay_api_replays_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody: {
+            content: {
+                "application/json": components["schemas"]["ReplayIn"];
+            };
+        };
+        responses: {
+            /** @description Successful Response */
+            202: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ReplayOut"];
+                };
+            };
+            /** @description the request body cannot be parsed */
+            400: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["HTTPValidationError"];
+                };
+            };
+            /** @description Unprocessable Entity */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+        };
+    };
+    replay_status_api_replays__replay_id__get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description row id */
+                replay_id: number;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ReplayOut"];
+                };
+            };
+            /** @description Not Found */
+            404: {
                 headers: {
                     [name: string]: unknown;
                 };
