@@ -45,22 +45,27 @@ class RecordingStatus(BaseModel):
 
 
 class LockIn(Strict):
-    """A time range, or a track (its first to last sighting)."""
+    """A time range, a track (its first to last sighting) or an alarm (its activation to its clear, or to now
+    while it is active), the last two widened by the recording's pre- and post-roll."""
 
     model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
-        {"start": 1795376480.0, "end": 1795376540.0, "note": "intrusion at the gate"}, {"track_id": 42}]})
+        {"start": 1795376480.0, "end": 1795376540.0, "note": "intrusion at the gate"}, {"track_id": 42},
+        {"alarm_id": 7}]})
 
     start: float | None = None
     end: float | None = None
     track_id: int | None = None
+    alarm_id: int | None = None
     note: str = Field("", max_length=2000)
 
     @model_validator(mode="after")
     def _one_kind(self) -> LockIn:
-        if self.track_id is None and (self.start is None or self.end is None):
-            raise ValueError("give start and end, or track_id")
-        if self.track_id is not None and (self.start is not None or self.end is not None):
-            raise ValueError("give start and end, or track_id, not both")
+        kinds = (self.start is not None or self.end is not None) + (self.track_id is not None) + \
+            (self.alarm_id is not None)
+        if kinds != 1:
+            raise ValueError("give start and end, or track_id, or alarm_id (one of them)")
+        if self.track_id is None and self.alarm_id is None and (self.start is None or self.end is None):
+            raise ValueError("give start and end, or track_id, or alarm_id")
         if self.start is not None and self.end is not None and not self.end > self.start:
             raise ValueError("end must be after start")
         return self
@@ -73,6 +78,7 @@ class LockOut(BaseModel):
     start: float
     end: float
     track_id: int | None
+    alarm_id: int | None = None
     note: str
     created_at: float
     created_by: int | None

@@ -1,6 +1,7 @@
 """Replay (issue #10 section 4) on a real server recording the simulated scene: a replay via the API runs the
 tracker on the recorded frames, its tracks are listed apart and the live tracks are untouched; bad requests
-are one-line 4xx that store nothing; the CLI rejects a bad range with one line."""
+are one-line 4xx that store nothing; the CLI rejects a bad range with one line. On the same server: the
+evidence lock of an alarm's footage (issue #10 section 1)."""
 
 from __future__ import annotations
 
@@ -13,6 +14,9 @@ from typing import Any
 import httpx
 import pytest
 from server_helpers import ROOT, Server, start_server
+
+from server.db.models import Alarm
+from server.services.evidence import alarm_range
 
 
 @pytest.fixture(scope="module")
@@ -98,3 +102,46 @@ def test_cli_bad_range_exits_with_one_line(server: Server) -> None:
                        cwd=ROOT, capture_output=True, text=True, timeout=60)
     assert p.returncode != 0
     assert len(p.stderr.strip().splitlines()) == 1 and "must be after start" in p.stderr
+
+
+def test_alarm_range_is_its_footage_with_pre_and_post_roll() -> None:
+    cleared = Alarm(activated_at=100.0, cleared_at=130.0)
+    assert alarm_range(cleared, 5.0, 7.0, now=500.0) == (95.0, 137.0)
+    active = Alarm(activated_at=100.0, cleared_at=None)
+    assert alarm_range(active, 5.0, 7.0, now=112.5) == (95.0, 112.5)
+
+
+NEAR = {"name": "anyone near", "priority": "critical", "on_delay_s": 0, "off_delay_s": 3,
+        "condition": {"kind": "range_below", "distance_m": 100}}
+
+
+def test_lock_an_alarms_footage(server: Server) -> None:
+    with server.client(server.login()) as admin, server.client(server.add_user("omar", "operator")) as op:
+        rid = admin.post("/api/alarm-rules", json=NEAR).json()["id"]
+        deadline = time.monotonic() + 120.0
+        alarms: list[dict[str, Any]] = []
+        while not alarms and time.monotonic() < deadline:
+            alarms = [a for a in op.get("/api/alarms").json() if a["rule_id"] == rid]
+            time.sleep(0.3)
+        assert alarms, "no alarm was raised"
+        a = alarms[0]
+        before = time.time()
+        r = op.post("/api/locks", json={"alarm_id": a["id"], "note": "alarm footage"})
+        assert r.status_code == 201, r.text
+        lock = r.json()
+        assert lock["alarm_id"] == a["id"] and lock["start"] == pytest.approx(a["activated_at"] - 5.0)
+        a = op.get(f"/api/alarms/{a['id']}").json()
+        if a["cleared_at"] is None:  # active when locked: up to the lock's moment
+            assert before - 1.0 <= lock["end"] <= time.time() + 1.0
+        else:
+            assert lock["end"] == pytest.approx(a["cleared_at"] + 5.0)
+        assert lock["id"] in [x["id"] for x in op.get("/api/locks").json()]
+        n = len(op.get("/api/locks").json())
+        for body, code, words in (({"alarm_id": 999999}, 404, "no alarm with id 999999"),
+                                  ({"alarm_id": a["id"], "start": 1.0, "end": 2.0}, 422, "one of them")):
+            r = op.post("/api/locks", json=body)
+            assert r.status_code == code and words in r.json()["detail"], r.text
+        assert len(op.get("/api/locks").json()) == n
+        assert op.delete(f"/api/locks/{lock['id']}").status_code == 403  # only an admin unlocks
+        assert admin.delete(f"/api/locks/{lock['id']}").status_code == 204
+        admin.delete(f"/api/alarm-rules/{rid}")

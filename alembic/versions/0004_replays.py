@@ -1,4 +1,4 @@
-"""replays: the tracker re-run on recordings; tracks carry the replay that found them
+"""replays: the tracker re-run on recordings; tracks carry the replay that found them; evidence locks of an alarm
 
 Revision ID: 0004_replays
 Revises: 0003
@@ -35,6 +35,9 @@ def upgrade() -> None:
     sa.ForeignKeyConstraint(['created_by'], ['users.id'], ondelete='SET NULL'),
     sa.PrimaryKeyConstraint('id')
     )
+    with op.batch_alter_table('evidence_locks', schema=None) as batch_op:
+        batch_op.add_column(sa.Column('alarm_id', sa.Integer(), nullable=True))
+        batch_op.create_foreign_key('fk_evidence_locks_alarm_id', 'alarms', ['alarm_id'], ['id'], ondelete='SET NULL')
     with op.batch_alter_table('tracks', schema=None) as batch_op:
         batch_op.add_column(sa.Column('replay_id', sa.Integer(), nullable=True))
         batch_op.create_index(batch_op.f('ix_tracks_replay_id'), ['replay_id'], unique=False)
@@ -48,4 +51,7 @@ def downgrade() -> None:
         batch_op.drop_index(batch_op.f('ix_tracks_replay_id'))
         batch_op.drop_column('replay_id')
 
+    with op.batch_alter_table('evidence_locks', schema=None) as batch_op:
+        batch_op.drop_constraint('fk_evidence_locks_alarm_id', type_='foreignkey')
+        batch_op.drop_column('alarm_id')
     op.drop_table('replays')

@@ -175,7 +175,8 @@ class RecordedFrame(Base):
 
 
 class EvidenceLock(Base):
-    """Footage kept until an admin unlocks it: a time range (Unix s), or a track's (then track_id is set)."""
+    """Footage kept until an admin unlocks it: a time range (Unix s), or a track's or an alarm's (then track_id or
+    alarm_id is set)."""
 
     __tablename__ = "evidence_locks"
 
@@ -183,6 +184,7 @@ class EvidenceLock(Base):
     start: Mapped[float] = mapped_column(Float)
     end: Mapped[float] = mapped_column(Float)
     track_id: Mapped[int | None] = mapped_column(ForeignKey("tracks.id", ondelete="SET NULL"), nullable=True)
+    alarm_id: Mapped[int | None] = mapped_column(ForeignKey("alarms.id", ondelete="SET NULL"), nullable=True)
     note: Mapped[str] = mapped_column(Text, default="")
     created_at: Mapped[float] = mapped_column(Float)
     created_by: Mapped[int | None] = mapped_column(ForeignKey("users.id", ondelete="SET NULL"), nullable=True)

@@ -580,7 +580,7 @@ export interface paths {
         /** Evidence locks overlapping start..end */
         get: operations["list_locks_api_locks_get"];
         put?: never;
-        /** Keep a time range, or a track's footage (widened by the pre- and post-roll), from retention */
+        /** Keep a time range, or a track's or an alarm's footage (widened by the pre- and post-roll), from retention */
         post: operations["add_lock_api_locks_post"];
         delete?: never;
         options?: never;
@@ -1583,7 +1583,8 @@ export interface components {
         };
         /**
          * LockIn
-         * @description A time range, or a track (its first to last sighting).
+         * @description A time range, a track (its first to last sighting) or an alarm (its activation to its clear, or to now
+         *     while it is active), the last two widened by the recording's pre- and post-roll.
          * @example {
          *       "end": 1795376540,
          *       "note": "intrusion at the gate",
@@ -1591,6 +1592,9 @@ export interface components {
          *     }
          * @example {
          *       "track_id": 42
+         *     }
+         * @example {
+         *       "alarm_id": 7
          *     }
          */
         LockIn: {
@@ -1600,6 +1604,8 @@ export interface components {
             end?: number | null;
             /** Track Id */
             track_id?: number | null;
+            /** Alarm Id */
+            alarm_id?: number | null;
             /**
              * Note
              * @default
@@ -1616,6 +1622,8 @@ export interface components {
             end: number;
             /** Track Id */
             track_id: number | null;
+            /** Alarm Id */
+            alarm_id?: number | null;
             /** Note */
             note: string;
             /** Created At */
