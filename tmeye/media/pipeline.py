@@ -32,7 +32,7 @@ class MediaConfig:
     encoders before the oldest is dropped (a dropped frame is neither shown nor recorded)."""
 
     bitrate: int = 1_500_000
-    gop: int = 45
+    gop: int = 30
     stamp_frames: bool = False
     mjpeg_fps: float = 15.0
     mjpeg_quality: int = 80
