@@ -22,7 +22,7 @@ export function replayPanel(operator: boolean, draw: (tracks: TrackDetail[]) => 
   const select = h("select", { name: "replay", "aria-label": "Replay shown" }, h("option", { value: "" }, "none"));
   const threshold = h("input", { type: "number", name: "threshold", min: 1, max: 254, placeholder: "live",
     disabled: !operator });
-  const runBtn = h("button", { type: "button", disabled: !operator }, "Replay the range");
+  const runBtn = h("button", { type: "button", disabled: !operator }, "Re-run the tracker on the range");
   const out = h("p", { class: "muted", "data-testid": "replay-status", "aria-live": "polite" });
   const el = h("section", { class: "panel" }, h("h2", null, "Replays (the tracker re-run on the recording)"),
     field("Shown (magenta)", select), field("Threshold ε", threshold, "empty: the live one"), runBtn, out);
