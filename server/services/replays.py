@@ -6,6 +6,7 @@ carrying status, progress and, at the end, the agreement with the live detection
 from __future__ import annotations
 
 import logging
+import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -63,6 +64,7 @@ class ReplayJobs:
     def __init__(self, sessions: sessionmaker[Session], data_dir: Path, sample_hz: float):
         self.sessions, self.data_dir, self.sample_hz = sessions, data_dir, sample_hz
         self.pool = ThreadPoolExecutor(1, thread_name_prefix="tmeye-replay")
+        self._stop = threading.Event()  # a server stop ends a running replay (then failed, its tracks removed)
         self._jobs: dict[int, tuple[StereoRig | None, TrackerTuning]] = {}
 
     def create(self, db: Session, user: User, start: float, end: float, live: LiveSetup,
@@ -96,6 +98,7 @@ class ReplayJobs:
         return row
 
     def close(self) -> None:
+        self._stop.set()
         self.pool.shutdown(wait=True, cancel_futures=True)
 
     def _set(self, replay_id: int, **values: Any) -> None:
@@ -133,6 +136,6 @@ class ReplayJobs:
                 flush(self.sessions, run_id, book, replay_id)
                 self._set(replay_id, progress=round(0.99 * progress, 3), frames=count[0])
 
-        agreement = run_replay(cfg, tuning, rig, on_frame)
+        agreement = run_replay(cfg, tuning, rig, on_frame, self._stop)
         flush(self.sessions, run_id, book, replay_id)
         return count[0], agreement.summary()
