@@ -31,8 +31,10 @@ def check_all(server: Server) -> list[dict[str, Any]]:
         tel = telemetry_by_pts(c, min(s["start"] for s in segs), max(s["end"] for s in segs))
         for seg in segs:
             chk = check_segment(c, seg, tel, start_pts_of(seg))
-            if chk.error is not None and c.get(f"/api/recordings/{seg['id']}/file").status_code == 404:
-                continue  # retention deleted it meanwhile (its row first: no row is left without a file)
+            gone = chk.error is not None or not (server.data_dir / seg["path"]).is_file()
+            if gone and c.get(f"/api/recordings/{seg['id']}/file").status_code == 404:
+                continue  # retention deleted it meanwhile, during or after its check (its row first: no row is
+                # left without a file)
             assert (server.data_dir / seg["path"]).is_file(), seg
             assert chk.error is None and chk.decoded == seg["frames"] > 0, (seg, chk)
             assert chk.telemetry_ok >= chk.decoded - 2, (seg, chk)  # the last second's telemetry may be lost
