@@ -30,7 +30,12 @@ def check_all(server: Server) -> list[dict[str, Any]]:
         assert segs
         tel = telemetry_by_pts(c, min(s["start"] for s in segs), max(s["end"] for s in segs))
         for seg in segs:
-            chk = check_segment(c, seg, tel, start_pts_of(seg))
+            try:
+                chk = check_segment(c, seg, tel, start_pts_of(seg))
+            except httpx.HTTPStatusError as exc:
+                if exc.response.status_code == 404:
+                    continue  # retention deleted it after the listing, before its check
+                raise
             gone = chk.error is not None or not (server.data_dir / seg["path"]).is_file()
             if gone and c.get(f"/api/recordings/{seg['id']}/file").status_code == 404:
                 continue  # retention deleted it meanwhile, during or after its check (its row first: no row is
