@@ -31,6 +31,7 @@ from server.routes import (
     health,
     live,
     recordings,
+    replays,
     servo,
     telemetry_ws,
     tracker,
@@ -41,6 +42,7 @@ from server.security import IdleTimer, LoginThrottle, new_secret
 from server.services import calibration as cal_service
 from server.services import control, segments
 from server.services import exports as export_service
+from server.services import replays as replay_service
 from server.services import users as user_service
 from server.services.alarms import AlarmOptions, AlarmService, counter_probe
 from server.services.calibration import CalibrationJobs
@@ -109,6 +111,7 @@ def _prepare_db(settings: Settings) -> tuple[AppContext, TrackerTuning, object]:
             log.warning("created user 'admin'; its password is in %s (mode 0600)", path.resolve())
         cal_service.mark_interrupted(db)
         export_service.mark_interrupted(db)
+        replay_service.mark_interrupted(db)
         saved = control.saved_tuning(db)
         rig = None if settings.rig else cal_service.active_rig(db)
     fixed = segments.reconcile(sessions, settings.data_dir)
@@ -143,6 +146,8 @@ async def _start_services(stack: contextlib.AsyncExitStack, ctx: AppContext, rt:
     stack.push_async_callback(ctx.calibrations.close)
     ctx.exports = ExportJobs(ctx.sessions, s.data_dir)
     stack.push_async_callback(asyncio.to_thread, ctx.exports.close)
+    ctx.replays = replay_service.ReplayJobs(ctx.sessions, s.data_dir, s.track_sample_hz)
+    stack.push_async_callback(asyncio.to_thread, ctx.replays.close)
     ctx.media = MediaPipeline(rt, MediaConfig(s.video_bitrate, s.video_gop, s.stamp_frames, s.mjpeg_fps,
                                               s.mjpeg_quality, s.media_queue, s.background_nice))
     ctx.media.start()
@@ -201,7 +206,7 @@ def create_app(settings: Settings, runtime: Runtime | None = None) -> FastAPI:
     errors.install(app)
     app.add_middleware(SecurityHeaders)
     for r in (health, auth, servo, tracks, tracker, calibration, users, live, telemetry_ws, recordings, evidence,
-              exports, alarms):
+              exports, replays, alarms):
         app.include_router(r.router)
     if WEB_DIST.is_dir():
         app.mount("/", StaticFiles(directory=WEB_DIST, html=True), name="web")

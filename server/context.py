@@ -23,6 +23,7 @@ if TYPE_CHECKING:
     from server.services.exports import ExportJobs
     from server.services.playback import FrameCache
     from server.services.recorder import Recorder
+    from server.services.replays import ReplayJobs
 
 
 @dataclass
@@ -43,5 +44,6 @@ class AppContext:
     recorder: Recorder | None = None
     frames: FrameCache | None = None
     exports: ExportJobs | None = None
+    replays: ReplayJobs | None = None
     alarms: AlarmService = None  # type: ignore[assignment]  # set by the lifespan
     idle: IdleTimer = field(default_factory=lambda: IdleTimer(30 * 60))

@@ -45,22 +45,27 @@ class RecordingStatus(BaseModel):
 
 
 class LockIn(Strict):
-    """A time range, or a track (its first to last sighting)."""
+    """A time range, a track (its first to last sighting) or an alarm (its activation to its clear, or to now
+    while it is active), the last two widened by the recording's pre- and post-roll."""
 
     model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
-        {"start": 1795376480.0, "end": 1795376540.0, "note": "intrusion at the gate"}, {"track_id": 42}]})
+        {"start": 1795376480.0, "end": 1795376540.0, "note": "intrusion at the gate"}, {"track_id": 42},
+        {"alarm_id": 7}]})
 
     start: float | None = None
     end: float | None = None
     track_id: int | None = None
+    alarm_id: int | None = None
     note: str = Field("", max_length=2000)
 
     @model_validator(mode="after")
     def _one_kind(self) -> LockIn:
-        if self.track_id is None and (self.start is None or self.end is None):
-            raise ValueError("give start and end, or track_id")
-        if self.track_id is not None and (self.start is not None or self.end is not None):
-            raise ValueError("give start and end, or track_id, not both")
+        kinds = (self.start is not None or self.end is not None) + (self.track_id is not None) + \
+            (self.alarm_id is not None)
+        if kinds != 1:
+            raise ValueError("give start and end, or track_id, or alarm_id (one of them)")
+        if self.track_id is None and self.alarm_id is None and (self.start is None or self.end is None):
+            raise ValueError("give start and end, or track_id, or alarm_id")
         if self.start is not None and self.end is not None and not self.end > self.start:
             raise ValueError("end must be after start")
         return self
@@ -73,6 +78,7 @@ class LockOut(BaseModel):
     start: float
     end: float
     track_id: int | None
+    alarm_id: int | None = None
     note: str
     created_at: float
     created_by: int | None
@@ -114,6 +120,36 @@ class ExportOut(BaseModel):
     end: float
     cameras: list[str]
     bytes: int | None
+    error: str | None
+    created_at: float
+    finished_at: float | None
+
+
+class ReplayIn(Strict):
+    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
+        {"start": 1795376480.0, "end": 1795376540.0, "threshold": 16, "calibration_id": None}]})
+
+    start: float = Field(allow_inf_nan=False, description="Unix s")
+    end: float = Field(allow_inf_nan=False, description="Unix s")
+    threshold: int | None = Field(None, ge=1, le=254, description="eq. (9) threshold ε in grey levels "
+                                  "(default: the live one)")
+    calibration_id: int | None = Field(None, ge=1, description="replay with this calibration's rig "
+                                       "(default: the live rig)")
+
+
+class ReplayOut(BaseModel):
+    model_config = ConfigDict(from_attributes=True)
+
+    id: int
+    status: Literal["queued", "running", "done", "failed"]
+    progress: float = Field(description="0 to 1")
+    start: float
+    end: float
+    settings: dict[str, Any] = Field(description="threshold, rig, background (and the simulated scene)")
+    frames: int = Field(description="stereo pairs replayed")
+    agreement: dict[str, Any] | None = Field(description="against the live detections of the same frames: "
+                                             "frames, same_count and same_detected (fractions), both_detected, "
+                                             "range_diff_median_m, range_diff_p95_m")
     error: str | None
     created_at: float
     finished_at: float | None

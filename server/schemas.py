@@ -218,6 +218,7 @@ class TrackOut(BaseModel):
     width_m: float | None
     height_m: float | None
     min_range_m: float | None
+    replay_id: int | None = Field(None, description="the replay that found it (None: seen live)")
 
 
 class TrackDetail(TrackOut):

@@ -55,7 +55,8 @@ class Settings(BaseSettings):
     stamp_frames: bool = Field(False, description="measurement mode: the video (never the tracker's input) "
                                                   "carries the frame index in its top-left 16 cells of 8x8 px")
     video_bitrate: int = Field(1_500_000, ge=100_000, le=50_000_000, description="H.264 bits per second per camera")
-    video_gop: int = Field(45, ge=1, le=600, description="frames between H.264 keyframes (45: 1.5 s at 30 fps)")
+    video_gop: int = Field(30, ge=1, le=600, description="frames between H.264 keyframes (30: 1 s at 30 fps; a "
+                           "recorded frame is decoded from its keyframe on, so this bounds the playback's work)")
     media_queue: int = Field(6, ge=1, le=90, description="frames waiting for the H.264 encoders before the oldest "
                              "is dropped: a short stall of the media thread costs the recording nothing, a "
                              "long one drops frames (neither shown nor recorded) rather than delaying the video")

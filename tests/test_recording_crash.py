@@ -34,11 +34,12 @@ def check_all(server: Server) -> list[dict[str, Any]]:
                 chk = check_segment(c, seg, tel, start_pts_of(seg))
             except httpx.HTTPStatusError as exc:
                 if exc.response.status_code == 404:
-                    continue  # retention deleted it between the listing and the fetch
+                    continue  # retention deleted it after the listing, before its check
                 raise
             gone = chk.error is not None or not (server.data_dir / seg["path"]).is_file()
             if gone and c.get(f"/api/recordings/{seg['id']}/file").status_code == 404:
-                continue  # retention deleted it meanwhile (its row first: no row is left without a file)
+                continue  # retention deleted it meanwhile, during or after its check (its row first: no row is
+                # left without a file)
             assert (server.data_dir / seg["path"]).is_file(), seg
             assert chk.error is None and chk.decoded == seg["frames"] > 0, (seg, chk)
             assert chk.telemetry_ok >= chk.decoded - 2, (seg, chk)  # the last second's telemetry may be lost

@@ -37,6 +37,8 @@ ROLE = {
     ("POST", "/api/bookmarks"): "operator", ("DELETE", "/api/bookmarks/{bookmark_id}"): "operator",
     ("POST", "/api/exports"): "operator", ("GET", "/api/exports"): "operator",
     ("GET", "/api/exports/{export_id}"): "operator", ("GET", "/api/exports/{export_id}/download"): "operator",
+    ("POST", "/api/replays"): "operator", ("GET", "/api/replays"): "operator",
+    ("GET", "/api/replays/{replay_id}"): "operator",
     ("GET", "/api/alarm-rules"): "viewer", ("POST", "/api/alarm-rules"): "admin",
     ("PATCH", "/api/alarm-rules/{rule_id}"): "admin", ("DELETE", "/api/alarm-rules/{rule_id}"): "admin",
     ("GET", "/api/alarms"): "viewer", ("GET", "/api/alarms/summary"): "viewer",
@@ -62,7 +64,7 @@ def tokens(server: Server) -> dict[str, str]:
 def _call(c: httpx.Client, method: str, path: str) -> httpx.Response:
     url = path.replace("{preset_id}", "999999").replace("{track_id}", "999999").replace("{rec_id}", "999999") \
         .replace("{user_id}", "999999").replace("{camera}", "left")
-    for name in ("seg_id", "lock_id", "bookmark_id", "export_id", "alarm_id", "rule_id"):
+    for name in ("seg_id", "lock_id", "bookmark_id", "export_id", "alarm_id", "rule_id", "replay_id"):
         url = url.replace("{" + name + "}", "999999")
     if url.endswith(".mjpeg"):  # a stream that never ends: its status line is enough
         with c.stream(method, url) as r:

@@ -76,7 +76,8 @@ class Calibration(Base):
 
 
 class Track(Base):
-    """A tracked object: `run_id` names the runtime that saw it (its ids start at 1 each run)."""
+    """A tracked object: `run_id` names the runtime that saw it (its ids start at 1 each run); `replay_id` the
+    replay that found it (None: the live runtime)."""
 
     __tablename__ = "tracks"
     __table_args__ = (Index("ix_tracks_run_track", "run_id", "track_no", unique=True),)
@@ -91,6 +92,8 @@ class Track(Base):
     width_m: Mapped[float | None] = mapped_column(Float, nullable=True)
     height_m: Mapped[float | None] = mapped_column(Float, nullable=True)
     min_range_m: Mapped[float | None] = mapped_column(Float, nullable=True)
+    replay_id: Mapped[int | None] = mapped_column(ForeignKey("replays.id", ondelete="CASCADE"), nullable=True,
+                                                  index=True)  # None: seen live
 
 
 class TrackPoint(Base):
@@ -172,7 +175,8 @@ class RecordedFrame(Base):
 
 
 class EvidenceLock(Base):
-    """Footage kept until an admin unlocks it: a time range (Unix s), or a track's (then track_id is set)."""
+    """Footage kept until an admin unlocks it: a time range (Unix s), or a track's or an alarm's (then track_id or
+    alarm_id is set)."""
 
     __tablename__ = "evidence_locks"
 
@@ -180,6 +184,7 @@ class EvidenceLock(Base):
     start: Mapped[float] = mapped_column(Float)
     end: Mapped[float] = mapped_column(Float)
     track_id: Mapped[int | None] = mapped_column(ForeignKey("tracks.id", ondelete="SET NULL"), nullable=True)
+    alarm_id: Mapped[int | None] = mapped_column(ForeignKey("alarms.id", ondelete="SET NULL"), nullable=True)
     note: Mapped[str] = mapped_column(Text, default="")
     created_at: Mapped[float] = mapped_column(Float)
     created_by: Mapped[int | None] = mapped_column(ForeignKey("users.id", ondelete="SET NULL"), nullable=True)
@@ -283,3 +288,24 @@ class AlarmEvent(Base):
     frame: Mapped[int | None] = mapped_column(Integer, nullable=True)
     target_id: Mapped[int | None] = mapped_column(Integer, nullable=True)
     message: Mapped[str | None] = mapped_column(Text, nullable=True)
+
+
+class Replay(Base):
+    """The tracker re-run on the recordings of start..end (Unix s) with `settings` (threshold, rig, background):
+    status queued, running, done or failed (with `error`); progress 0 to 1; its tracks carry its id. frames: pairs
+    replayed; agreement: how its detections compare with the live ones of the same frames."""
+
+    __tablename__ = "replays"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    status: Mapped[str] = mapped_column(String(16))
+    progress: Mapped[float] = mapped_column(Float, default=0.0)
+    start: Mapped[float] = mapped_column(Float)
+    end: Mapped[float] = mapped_column(Float)
+    settings: Mapped[dict[str, Any]] = mapped_column(JSON)
+    frames: Mapped[int] = mapped_column(Integer, default=0)
+    agreement: Mapped[dict[str, Any] | None] = mapped_column(JSON, nullable=True)
+    error: Mapped[str | None] = mapped_column(Text, nullable=True)
+    created_at: Mapped[float] = mapped_column(Float)
+    created_by: Mapped[int | None] = mapped_column(ForeignKey("users.id", ondelete="SET NULL"), nullable=True)
+    finished_at: Mapped[float | None] = mapped_column(Float, nullable=True)

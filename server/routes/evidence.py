@@ -22,10 +22,12 @@ def list_locks(_p: Viewer, db: DbDep, start: Time = None, end: Time = None) -> l
 
 
 @router.post("/locks", response_model=LockOut, status_code=201, responses={**NOT_FOUND, 422: {"model": Message}},
-             summary="Keep a time range, or a track's footage (widened by the pre- and post-roll), from retention")
+             summary="Keep a time range, or a track's or an alarm's footage (widened by the pre- and post-roll), "
+                     "from retention")
 def add_lock(body: LockIn, ctx: CtxDep, p: Operator, db: DbDep, addr: Address) -> Any:
     margin = max(ctx.settings.preroll_s, ctx.settings.postroll_s)
-    return evidence.add_lock(db, p.user, addr, body.start, body.end, body.track_id, body.note, margin)
+    roll = (margin, margin) if body.track_id is not None else (ctx.settings.preroll_s, ctx.settings.postroll_s)
+    return evidence.add_lock(db, p.user, addr, body.start, body.end, body.track_id, body.note, roll, body.alarm_id)
 
 
 @router.delete("/locks/{lock_id}", status_code=204, responses=NOT_FOUND, summary="Unlock (admin)")

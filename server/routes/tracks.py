@@ -17,8 +17,10 @@ router = APIRouter(prefix="/api/tracks", tags=["tracks"])
 @router.get("", response_model=list[TrackOut], summary="Tracks seen between start and end (Unix s), newest first")
 def list_tracks(_p: Viewer, db: DbDep, start: Annotated[float | None, Query(description="Unix s")] = None,
                 end: Annotated[float | None, Query(description="Unix s")] = None,
-                limit: Annotated[int, Query(ge=1, le=10000)] = 500) -> list[Any]:
-    return track_service.list_tracks(db, start, end, limit)
+                limit: Annotated[int, Query(ge=1, le=10000)] = 500,
+                replay: Annotated[int | None, Query(ge=1, description="a replay's tracks (default: the live ones)")]
+                = None) -> list[Any]:
+    return track_service.list_tracks(db, start, end, limit, replay)
 
 
 @router.post("/{track_id}/primary", status_code=204, responses={404: {"model": Message}, 409: {"model": Message}},

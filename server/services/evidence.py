@@ -7,25 +7,39 @@ import time
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from server.db.models import Bookmark, EvidenceLock, Track, User
+from server.db.models import Alarm, Bookmark, EvidenceLock, Track, User
 from server.services import audit
 from server.services.errors import NotFound
 
 
+def alarm_range(alarm: Alarm, preroll_s: float, postroll_s: float, now: float) -> tuple[float, float]:
+    """The footage of an alarm (Unix s): from its activation less the pre-roll to its clear plus the post-roll,
+    or to now while it is active."""
+    end = alarm.cleared_at + postroll_s if alarm.cleared_at is not None else now
+    return alarm.activated_at - preroll_s, max(end, alarm.activated_at)
+
+
 def add_lock(db: Session, user: User, address: str, start: float | None, end: float | None, track_id: int | None,
-             note: str, margin_s: float) -> EvidenceLock:
-    """Lock start..end, or a track's first to last sighting widened by `margin_s` on each side."""
+             note: str, roll_s: tuple[float, float], alarm_id: int | None = None) -> EvidenceLock:
+    """Lock start..end, a track's first to last sighting or an alarm's footage (`alarm_range`), the last two
+    widened by roll_s = (pre-roll, post-roll) seconds."""
     if track_id is not None:
         tr = db.get(Track, track_id)
         if tr is None:
             raise NotFound(f"no track with id {track_id}")
-        start, end = tr.first_seen - margin_s, tr.last_seen + margin_s
+        start, end = tr.first_seen - roll_s[0], tr.last_seen + roll_s[1]
+    if alarm_id is not None:
+        alarm = db.get(Alarm, alarm_id)
+        if alarm is None:
+            raise NotFound(f"no alarm with id {alarm_id}")
+        start, end = alarm_range(alarm, roll_s[0], roll_s[1], time.time())
     assert start is not None and end is not None
-    row = EvidenceLock(start=start, end=end, track_id=track_id, note=note, created_at=time.time(), created_by=user.id)
+    row = EvidenceLock(start=start, end=end, track_id=track_id, alarm_id=alarm_id, note=note, created_at=time.time(),
+                       created_by=user.id)
     db.add(row)
     db.flush()
     audit.record(db, user, address, "evidence.lock", f"lock {row.id}",
-                 {"start": start, "end": end, "track_id": track_id, "note": note})
+                 {"start": start, "end": end, "track_id": track_id, "alarm_id": alarm_id, "note": note})
     db.commit()
     return row
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 import bisect
 import threading
 from collections import OrderedDict
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -67,76 +67,121 @@ def frame_ref(db: Session, seg: Segment, ticks: int) -> FrameRef:
 
 
 class FrameCache:
-    """Decoded keyframe groups (LRU of `groups`) and JPEGs (LRU of `jpegs`) of recorded segments."""
+    """Decoded keyframe groups (LRU of `groups`), JPEGs (LRU of `jpegs`) and the open decoders of the last few
+    segments (LRU of `decoders`): a frame later in the group the decoder is in is reached by decoding forward
+    from where it stopped (stepping or playing forward decodes one frame per step), any other by a seek to its
+    keyframe in the already open file."""
 
-    def __init__(self, data_dir: Path, groups: int = 4, jpegs: int = 512, quality: int = 90):
+    def __init__(self, data_dir: Path, groups: int = 4, jpegs: int = 512, quality: int = 90, decoders: int = 4):
         self.data_dir, self.quality = data_dir, quality
-        self._groups: OrderedDict[tuple[int, int], GroupDecoder] = OrderedDict()
+        self._groups: OrderedDict[tuple[int, int], dict[int, av.VideoFrame]] = OrderedDict()
         self._jpegs: OrderedDict[tuple[int, int], bytes] = OrderedDict()
-        self._max_groups, self._max_jpegs = groups, jpegs
+        self._decoders: OrderedDict[int, SegmentDecoder] = OrderedDict()
+        self._max_groups, self._max_jpegs, self._max_decoders = groups, jpegs, decoders
         self._lock = threading.Lock()
-        self.decoded_groups = 0
+        self.decoded_groups = 0  # keyframe groups a decoder was sent to (a seek or a segment opened)
 
     def jpeg(self, ref: FrameRef) -> FrameJpeg:
         key = (ref.segment_id, ref.offset)
         with self._lock:
             data = self._jpegs.get(key)
             if data is None:
-                frame = self._group(ref).get(ref.offset)
+                frame = self._frame(ref)
                 if frame is None:
                     raise NotFound(f"frame at {ref.offset / CLOCK_HZ:.3f} s of segment {ref.segment_id} "
                                    "does not decode")
-                ok, buf = cv2.imencode(".jpg", frame.to_ndarray(format="bgr24"), [cv2.IMWRITE_JPEG_QUALITY,
-                                                                                 self.quality])
-                data = buf.tobytes() if ok else b""
+                data = encode_jpeg(frame, self.quality)
                 self._jpegs[key] = data
                 while len(self._jpegs) > self._max_jpegs:
                     self._jpegs.popitem(last=False)
             self._jpegs.move_to_end(key)
         return FrameJpeg(data, ref.frame_no, ref.captured_at, ref.segment_id, ref.offset / CLOCK_HZ)
 
-    def _group(self, ref: FrameRef) -> dict[int, av.VideoFrame]:
-        key = (ref.segment_id, ref.key_offset)
-        group = self._groups.get(key)
+    def _frame(self, ref: FrameRef) -> av.VideoFrame | None:
+        gkey = (ref.segment_id, ref.key_offset)
+        group = self._groups.get(gkey)
+        if group is None or ref.offset not in group:
+            dec = self._decoders.get(ref.segment_id)
+            if dec is None:
+                dec = self._decoders[ref.segment_id] = SegmentDecoder(self.data_dir / ref.path)
+                while len(self._decoders) > self._max_decoders:
+                    self._decoders.popitem(last=False)[1].close()
+            self._decoders.move_to_end(ref.segment_id)
+            self.decoded_groups += dec.decode_to(ref.key_offset, ref.offset,
+                                                 lambda k, pts, f: self._store(ref.segment_id, k, pts, f))
+            group = self._groups.get(gkey)
         if group is None:
-            group = self._groups[key] = GroupDecoder(self.data_dir / ref.path, ref.key_offset)
-            self.decoded_groups += 1
+            return None
+        self._groups.move_to_end(gkey)
+        return group.get(ref.offset)
+
+    def _store(self, segment_id: int, key_offset: int, pts: int, frame: av.VideoFrame) -> None:
+        gkey = (segment_id, key_offset)
+        group = self._groups.get(gkey)
+        if group is None:
+            group = self._groups[gkey] = {}
             while len(self._groups) > self._max_groups:
-                self._groups.popitem(last=False)[1].close()
-        self._groups.move_to_end(key)
-        return group.upto(ref.offset)
+                self._groups.popitem(last=False)
+        group[pts] = frame
 
 
-class GroupDecoder:
-    """One keyframe group of a segment, decoded on demand from its keyframe: a later frame of the same group
-    continues where the decoder stopped (stepping forward decodes one frame per step)."""
+def encode_jpeg(frame: av.VideoFrame, quality: int) -> bytes:
+    """JPEG of a decoded frame: a 4:2:0 frame is turned into BGR by OpenCV (cheaper than libswscale's bgr24)."""
+    if frame.format.name == "yuv420p" and frame.width % 2 == 0 and frame.height % 2 == 0:
+        bgr = cv2.cvtColor(frame.to_ndarray(format="yuv420p"), cv2.COLOR_YUV2BGR_I420)
+    else:
+        bgr = frame.to_ndarray(format="bgr24")
+    ok, buf = cv2.imencode(".jpg", bgr, [cv2.IMWRITE_JPEG_QUALITY, quality])
+    return buf.tobytes() if ok else b""
 
-    def __init__(self, path: Path, key_offset: int):
-        self.key_offset = key_offset
-        self.frames: dict[int, av.VideoFrame] = {}
+
+class SegmentDecoder:
+    """One segment's open file and decoder. `decode_to(key, offset, store)` decodes the keyframe group that
+    starts at `key` (90 kHz ticks in the segment) up to `offset`, handing each frame to store(key, pts, frame):
+    forward from where it stopped when it is in that group before `offset`, else after a seek to `key`."""
+
+    def __init__(self, path: Path):
         self.container: av.container.InputContainer | None = av.open(str(path))
-        st = self.container.streams.video[0]
-        st.codec_context.thread_type = "NONE"  # one thread: each packet's frame comes out at once (measured faster
-        # here than slice or frame threads for decoding up to one frame of a group)
-        self.container.seek(key_offset, stream=st, backward=True, any_frame=False)
-        self._it = self._frames(st)
+        self.stream = self.container.streams.video[0]
+        self.stream.codec_context.thread_type = "NONE"  # one thread: each packet's frame comes out at once (measured
+        # faster here than slice or frame threads for decoding up to one frame of a group)
+        self._it: Iterator[av.VideoFrame] | None = None
+        self.group: int | None = None  # the keyframe group of the last frame decoded
+        self.pos = -1  # the last frame decoded (ticks)
 
-    def _frames(self, st: av.video.stream.VideoStream) -> Iterator[av.VideoFrame]:
+    def _frames(self) -> Iterator[av.VideoFrame]:
         assert self.container is not None
         try:
-            for pkt in self.container.demux(st):
+            for pkt in self.container.demux(self.stream):
                 yield from pkt.decode()
         except av.error.InvalidDataError:
             return  # the cut tail of a segment
 
-    def upto(self, offset: int) -> dict[int, av.VideoFrame]:
-        while offset not in self.frames and self.container is not None:
+    def decode_to(self, key: int, offset: int, store: Callable[[int, int, av.VideoFrame], None]) -> int:
+        """Returns 1 if a seek was needed, else 0."""
+        if self.container is None:
+            return 0
+        sought = 0
+        if self._it is None or self.group != key or self.pos >= offset:
+            self.container.seek(key, stream=self.stream, backward=True, any_frame=False)
+            self._it, self.group, self.pos, sought = self._frames(), None, -1, 1
+        while self.pos < offset:
             frame = next(self._it, None)
-            if frame is None or (frame.key_frame and frame.pts is not None and frame.pts > self.key_offset):
-                self.close()  # the group ended
-            elif frame.pts is not None and frame.pts >= self.key_offset:
-                self.frames[int(frame.pts)] = frame
-        return self.frames
+            if frame is None:
+                self._it = None  # the segment ended
+                break
+            if frame.pts is None:
+                continue
+            pts = int(frame.pts)
+            if frame.key_frame:
+                self.group = pts
+            if self.group is None or pts < key:
+                continue
+            self.pos = pts
+            store(self.group, pts, frame)
+            if self.group != key:  # the next group began (kept for a request there): `offset` is not in this one
+                break
+        return sought
 
     def close(self) -> None:
         if self.container is not None:

@@ -82,8 +82,9 @@ class TrackBook:
             del self.tracks[k]
 
 
-def flush(sessions: sessionmaker[Session], run_id: str, book: TrackBook) -> int:
-    """Write every changed track and its new samples in one transaction; returns the samples written."""
+def flush(sessions: sessionmaker[Session], run_id: str, book: TrackBook, replay_id: int | None = None) -> int:
+    """Write every changed track and its new samples in one transaction; returns the samples written.
+    `replay_id`: the tracks are a replay's (None: the live runtime's)."""
     n = 0
     with sessions() as db, db.begin():
         for tr in book.tracks.values():
@@ -92,7 +93,7 @@ def flush(sessions: sessionmaker[Session], run_id: str, book: TrackBook) -> int:
             row = db.get(Track, tr.db_id) if tr.db_id is not None else None
             if row is None:
                 row = Track(run_id=f"{run_id}.{tr.generation}", track_no=tr.track_no, first_seen=tr.first_seen,
-                            last_seen=tr.last_seen, detections=0, peak_speed_mps=0.0)
+                            last_seen=tr.last_seen, detections=0, peak_speed_mps=0.0, replay_id=replay_id)
                 db.add(row)
             row.last_seen, row.detections, row.peak_speed_mps = tr.last_seen, tr.detections, tr.peak_speed_mps
             row.width_m, row.height_m, row.min_range_m = tr.width_m, tr.height_m, tr.min_range_m
@@ -149,8 +150,11 @@ class TrackWriter:
                 log.warning("writing tracks failed again (%d times): %s", self.errors, str(exc).splitlines()[0])
 
 
-def list_tracks(db: Session, start: float | None, end: float | None, limit: int) -> list[Track]:
-    q = select(Track).order_by(Track.first_seen.desc()).limit(limit)
+def list_tracks(db: Session, start: float | None, end: float | None, limit: int,
+                replay_id: int | None = None) -> list[Track]:
+    """The live tracks (replay_id None) or one replay's, overlapping start..end, newest first."""
+    q = (select(Track).where(Track.replay_id.is_(None) if replay_id is None else Track.replay_id == replay_id)
+         .order_by(Track.first_seen.desc()).limit(limit))
     if start is not None:
         q = q.where(Track.last_seen >= start)
     if end is not None:

@@ -15,10 +15,18 @@ from tmeye.errors import UserError
 
 def register(subparsers: Any) -> None:
     p = subparsers.add_parser("track", help="track a target and print per-frame telemetry")
-    p.add_argument("--source", default="sim", choices=("sim", "files", "usb", "rtsp"),
-                   help="frame source (default: the simulated rig)")
+    p.add_argument("--source", default="sim", choices=("sim", "files", "usb", "rtsp", "recording"),
+                   help="frame source (default: the simulated rig; recording: a server's recordings of "
+                        "--start..--end in --data-dir, replayed as fast as possible)")
+    p.add_argument("--data-dir", help="with --source recording: the server's data directory")
+    p.add_argument("--start", type=float, help="with --source recording: the range's start (Unix s)")
+    p.add_argument("--end", type=float, help="with --source recording: the range's end (Unix s)")
+    p.add_argument("--background", choices=("scene", "first"), default="scene",
+                   help="with --source recording: learn the background from the simulated --scenario (default "
+                        "endless, as `tmeye serve`) or from the first recorded pair (real cameras)")
     p.add_argument("inputs", nargs="*", help="LEFT RIGHT: video files, camera indices/devices or RTSP URLs")
-    p.add_argument("--scenario", default="walk", help="simulated scenario (with --source sim)")
+    p.add_argument("--scenario", help="simulated scenario (with --source sim, default walk; with --source "
+                                      "recording, default endless)")
     p.add_argument("--seed", type=int, default=0, help="simulated scene seed")
     p.add_argument("--rig", help="rig file (tmeye calibrate); required for real sources")
     p.add_argument("--frames", type=int, help="stop after this many frames")
@@ -61,7 +69,7 @@ def parse_limits(text: str | None) -> tuple[float, float] | None:
     return lo, hi
 
 
-def _line(tm: dict[str, Any]) -> str:
+def line(tm: dict[str, Any]) -> str:
     if not tm["detected"]:
         return f"frame {tm['frame']:>6}  no target{'':52s} {tm['fps']:6.1f} fps"
     return (f"frame {tm['frame']:>6}  track {tm['track_id']:>3}  r {tm['r']:7.3f} ± {tm['sigma_r']:.3f} m  "
@@ -71,6 +79,10 @@ def _line(tm: dict[str, Any]) -> str:
 def run(args: argparse.Namespace) -> int:
     from tmeye.runtime import ComposeError, Runtime, RuntimeConfig
 
+    if args.source == "recording":
+        from tmeye.commands.replay import run_recording
+
+        return run_recording(args)
     if args.frames is not None and args.frames < 1:
         raise UserError(f"--frames must be at least 1, got {args.frames}")
     if args.source == "sim" and args.inputs:
@@ -78,7 +90,8 @@ def run(args: argparse.Namespace) -> int:
     if args.source != "sim" and not args.rig:
         raise UserError(f"--source {args.source} needs --rig RIG.json (make one with `tmeye calibrate`)")
     try:
-        cfg = RuntimeConfig(source=args.source, inputs=tuple(args.inputs), scenario=args.scenario, seed=args.seed,
+        cfg = RuntimeConfig(source=args.source, inputs=tuple(args.inputs), scenario=args.scenario or "walk",
+                            seed=args.seed,
                             rig=args.rig, servo=args.servo, realtime=not args.fast and args.source == "sim",
                             loop_source=args.loop, max_frames=args.frames, origin=parse_origin(args.origin),
                             baseline_limits_m=parse_limits(args.baseline_limits))
@@ -116,7 +129,7 @@ def _print_frames(args: argparse.Namespace, sub: Any, live: bool) -> None:
         if args.json:
             print(json.dumps(tm), flush=True)
         elif live:
-            sys.stdout.write("\r" + _line(tm))
+            sys.stdout.write("\r" + line(tm))
             sys.stdout.flush()
         else:
-            print(_line(tm))
+            print(line(tm))

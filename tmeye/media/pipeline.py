@@ -34,7 +34,7 @@ class MediaConfig:
     nicer than the tracker's worker the encoding thread and libx264's threads run (0: the same)."""
 
     bitrate: int = 1_500_000
-    gop: int = 45
+    gop: int = 30
     stamp_frames: bool = False
     mjpeg_fps: float = 15.0
     mjpeg_quality: int = 80

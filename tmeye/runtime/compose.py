@@ -67,16 +67,20 @@ def compose(cfg: RuntimeConfig, tuning: TrackerTuning | None = None, rig: Stereo
             raise ComposeError(str(exc)) from None
     if cfg.source == "sim":
         return _compose_sim(cfg, tuning, rig)
+    if cfg.source == "recording":
+        from tmeye.runtime.replay_compose import compose_recording
+
+        return compose_recording(cfg, tuning, rig)
     return _compose_real(cfg, tuning, rig)
 
 
-def _pipeline(rig: StereoRig, cfg: RuntimeConfig, tuning: TrackerTuning, fps: float) -> Pipeline:
-    with _rig_errors(cfg):
+def pipeline(rig: StereoRig, cfg: RuntimeConfig, tuning: TrackerTuning, fps: float) -> Pipeline:
+    with rig_errors(cfg):
         return Pipeline(rig, replace(tuning.detector, fps=fps), tuning.tracks, origin=np.array(cfg.origin, float))
 
 
 @contextmanager
-def _rig_errors(cfg: RuntimeConfig) -> Iterator[None]:
+def rig_errors(cfg: RuntimeConfig) -> Iterator[None]:
     """A RigError (the rig against the settings or the first frames) as a ComposeError naming the file."""
     try:
         yield
@@ -91,7 +95,7 @@ def _compose_sim(cfg: RuntimeConfig, tuning: TrackerTuning, rig: StereoRig | Non
         raise ComposeError(str(exc)) from None
     sim = SimRig(scenario, seed=cfg.seed)  # a finite scenario that should repeat is rewound by the runtime
     rig = rig or sim.rig
-    pipe = _pipeline(rig, cfg, tuning, scenario.fps)
+    pipe = pipeline(rig, cfg, tuning, scenario.fps)
     driver = _open_driver(cfg)
     source: FrameSource = sim
     loop = controller = None
@@ -107,7 +111,7 @@ def _compose_sim(cfg: RuntimeConfig, tuning: TrackerTuning, rig: StereoRig | Non
             loop = _loop(pipe, controller, driver)
         else:
             poses = survey_poses(scenario)
-        with _rig_errors(cfg):
+        with rig_errors(cfg):
             for g in poses:
                 pipe.learn_background(sim.background(g))
     except BaseException:
@@ -140,8 +144,8 @@ def _compose_real(cfg: RuntimeConfig, tuning: TrackerTuning, rig: StereoRig | No
         raise
     fps = float(getattr(src, "fps", 0.0) or 30.0)
     try:
-        pipe = _pipeline(rig, cfg, tuning, fps)
-        with _rig_errors(cfg):
+        pipe = pipeline(rig, cfg, tuning, fps)
+        with rig_errors(cfg):
             pipe.learn_background(first)  # the first pair is taken as the empty background
     except BaseException:
         src.close()
@@ -188,7 +192,7 @@ def rebuild_pipeline(comp: Composition, rig: StereoRig, tuning: TrackerTuning) -
     """A new pipeline (and servo loop, sharing the running controller and driver) for `rig` on the same
     source. For the simulator the background is learnt from a second renderer of the same scene (the
     running one belongs to the worker); a real source's is learnt by the worker from its next frame."""
-    pipe = _pipeline(rig, comp.config, tuning, comp.fps)
+    pipe = pipeline(rig, comp.config, tuning, comp.fps)
     if comp.sim is not None:
         scenario = comp.sim.scenario
         twin = SimRig(scenario, seed=comp.config.seed)
@@ -210,7 +214,9 @@ def describe_source(c: Composition) -> dict[str, Any]:
     """The source part of the status: kind, scenario or inputs, frame rate, image size."""
     w, h = c.rig.left.size
     out: dict[str, Any] = {"kind": c.config.source, "fps": c.fps, "width": w, "height": h}
-    if c.config.source == "sim":
+    if c.config.source == "recording":
+        out.update({"inputs": list(c.config.inputs), "start": c.config.start, "end": c.config.end})
+    elif c.config.source == "sim":
         out.update({"scenario": c.config.scenario, "seed": c.config.seed})
     else:
         out["inputs"] = list(c.config.inputs)

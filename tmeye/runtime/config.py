@@ -10,7 +10,7 @@ from tracker.aim import AimConfig
 from tracker.detect import DetectorConfig
 from tracker.tracks import TrackerConfig
 
-SOURCE_KINDS = ("sim", "files", "usb", "rtsp")
+SOURCE_KINDS = ("sim", "files", "usb", "rtsp", "recording")
 
 
 @dataclass(frozen=True)
@@ -36,13 +36,18 @@ class RuntimeConfig:
     max_frames: int | None = None
     origin: tuple[float, float, float] = (0.0, 0.0, 0.0)
     baseline_limits_m: tuple[float, float] | None = None
+    start: float | None = None
+    end: float | None = None
 
     def __post_init__(self) -> None:
         if self.source not in SOURCE_KINDS:
             raise ValueError(f"unknown source {self.source!r}; use one of {', '.join(SOURCE_KINDS)}")
         if self.source == "sim" and self.inputs:
             raise ValueError("the simulated source takes no LEFT RIGHT inputs")
-        if self.source != "sim" and len(self.inputs) != 2:
+        if self.source == "recording":
+            if len(self.inputs) != 1 or self.start is None or self.end is None:
+                raise ValueError("source recording needs one input, the data directory, and start and end")
+        elif self.source != "sim" and len(self.inputs) != 2:
             raise ValueError(f"source {self.source} needs two inputs, LEFT and RIGHT (got {len(self.inputs)})")
         if self.max_frames is not None and self.max_frames < 1:
             raise ValueError(f"max_frames must be at least 1, got {self.max_frames}")

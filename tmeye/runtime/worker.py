@@ -267,6 +267,8 @@ class Runtime:
             return False
         if comp.config.source in ("usb", "rtsp"):  # live stamps are time.monotonic()
             captured_at = time.time() - (time.monotonic() - frame.t)
+        elif comp.config.source == "recording":  # replayed: the recorded capture time
+            captured_at = frame.t
         try:
             ev = self._process(frame, captured_at)
         except Exception as exc:

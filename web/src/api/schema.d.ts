@@ -580,7 +580,7 @@ export interface paths {
         /** Evidence locks overlapping start..end */
         get: operations["list_locks_api_locks_get"];
         put?: never;
-        /** Keep a time range, or a track's footage (widened by the pre- and post-roll), from retention */
+        /** Keep a time range, or a track's or an alarm's footage (widened by the pre- and post-roll), from retention */
         post: operations["add_lock_api_locks_post"];
         delete?: never;
         options?: never;
@@ -684,6 +684,41 @@ export interface paths {
         };
         /** The finished export (zip) */
         get: operations["download_api_exports__export_id__download_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/replays": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /** Replays, newest first */
+        get: operations["list_replays_api_replays_get"];
+        put?: never;
+        /** Re-run the tracker on the recordings of start..end (threshold, rig); its tracks are stored apart */
+        post: operations["create_replay_api_replays_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/replays/{replay_id}": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /** A replay's status, progress and agreement with the live result */
+        get: operations["replay_status_api_replays__replay_id__get"];
         put?: never;
         post?: never;
         delete?: never;
@@ -1590,7 +1625,8 @@ export interface components {
         };
         /**
          * LockIn
-         * @description A time range, or a track (its first to last sighting).
+         * @description A time range, a track (its first to last sighting) or an alarm (its activation to its clear, or to now
+         *     while it is active), the last two widened by the recording's pre- and post-roll.
          * @example {
          *       "end": 1795376540,
          *       "note": "intrusion at the gate",
@@ -1598,6 +1634,9 @@ export interface components {
          *     }
          * @example {
          *       "track_id": 42
+         *     }
+         * @example {
+         *       "alarm_id": 7
          *     }
          */
         LockIn: {
@@ -1607,6 +1646,8 @@ export interface components {
             end?: number | null;
             /** Track Id */
             track_id?: number | null;
+            /** Alarm Id */
+            alarm_id?: number | null;
             /**
              * Note
              * @default
@@ -1623,6 +1664,8 @@ export interface components {
             end: number;
             /** Track Id */
             track_id: number | null;
+            /** Alarm Id */
+            alarm_id?: number | null;
             /** Note */
             note: string;
             /** Created At */
@@ -1802,6 +1845,80 @@ export interface components {
             telemetry_rows: number;
             /** Telemetry Missing */
             telemetry_missing: number;
+        };
+        /**
+         * ReplayIn
+         * @example {
+         *       "end": 1795376540,
+         *       "start": 1795376480,
+         *       "threshold": 16
+         *     }
+         */
+        ReplayIn: {
+            /**
+             * Start
+             * @description Unix s
+             */
+            start: number;
+            /**
+             * End
+             * @description Unix s
+             */
+            end: number;
+            /**
+             * Threshold
+             * @description eq. (9) threshold ε in grey levels (default: the live one)
+             */
+            threshold?: number | null;
+            /**
+             * Calibration Id
+             * @description replay with this calibration's rig (default: the live rig)
+             */
+            calibration_id?: number | null;
+        };
+        /** ReplayOut */
+        ReplayOut: {
+            /** Id */
+            id: number;
+            /**
+             * Status
+             * @enum {string}
+             */
+            status: "queued" | "running" | "done" | "failed";
+            /**
+             * Progress
+             * @description 0 to 1
+             */
+            progress: number;
+            /** Start */
+            start: number;
+            /** End */
+            end: number;
+            /**
+             * Settings
+             * @description threshold, rig, background (and the simulated scene)
+             */
+            settings: {
+                [key: string]: unknown;
+            };
+            /**
+             * Frames
+             * @description stereo pairs replayed
+             */
+            frames: number;
+            /**
+             * Agreement
+             * @description against the live detections of the same frames: frames, same_count and same_detected (fractions), both_detected, range_diff_median_m, range_diff_p95_m
+             */
+            agreement: {
+                [key: string]: unknown;
+            } | null;
+            /** Error */
+            error: string | null;
+            /** Created At */
+            created_at: number;
+            /** Finished At */
+            finished_at: number | null;
         };
         /**
          * SegmentOut
@@ -2154,6 +2271,11 @@ export interface components {
             height_m: number | null;
             /** Min Range M */
             min_range_m: number | null;
+            /**
+             * Replay Id
+             * @description the replay that found it (None: seen live)
+             */
+            replay_id?: number | null;
             /** Trajectory */
             trajectory: components["schemas"]["TrackPointOut"][];
         };
@@ -2179,6 +2301,11 @@ export interface components {
             height_m: number | null;
             /** Min Range M */
             min_range_m: number | null;
+            /**
+             * Replay Id
+             * @description the replay that found it (None: seen live)
+             */
+            replay_id?: number | null;
         };
         /** TrackPointOut */
         TrackPointOut: {
@@ -2972,6 +3099,8 @@ export interface operations {
                 /** @description Unix s */
                 end?: number | null;
                 limit?: number;
+                /** @description a replay's tracks (default: the live ones) */
+                replay?: number | null;
             };
             header?: never;
             path?: never;
@@ -4242,6 +4371,109 @@ export interface operations {
             };
             /** @description Conflict */
             409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+            /** @description Validation Error */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["HTTPValidationError"];
+                };
+            };
+        };
+    };
+    list_replays_api_replays_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ReplayOut"][];
+                };
+            };
+        };
+    };
+    create_replay_api_replays_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody: {
+            content: {
+                "application/json": components["schemas"]["ReplayIn"];
+            };
+        };
+        responses: {
+            /** @description Successful Response */
+            202: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ReplayOut"];
+                };
+            };
+            /** @description the request body cannot be parsed */
+            400: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["HTTPValidationError"];
+                };
+            };
+            /** @description Unprocessable Entity */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Message"];
+                };
+            };
+        };
+    };
+    replay_status_api_replays__replay_id__get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description row id */
+                replay_id: number;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ReplayOut"];
+                };
+            };
+            /** @description Not Found */
+            404: {
                 headers: {
                     [name: string]: unknown;
                 };

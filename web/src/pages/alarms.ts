@@ -2,7 +2,7 @@
 // or every alarm of the last day; acknowledge with a comment, shelve for some minutes or until the alarm
 // clears (one-shot) with a reason, unshelve (operator), each alarm's history with who did what, a link to its playback; the rules
 // (admin: create, enable, take out of service, delete).
-import { api, ApiError } from "../api/client";
+import { api, ApiError, request } from "../api/client";
 import type { AlarmOut } from "../api/types";
 import { alarmCenter, byPriorityThenTime } from "../lib/alarms";
 import { h, notice } from "../lib/dom";
@@ -71,8 +71,11 @@ export function alarmsPage(ctx: PageContext): Page {
       onclick: () => void showHistory() }, "History");
     const playback = h("button", { type: "button", class: "link", onclick: () => void api.alarm(a.id).then(
       (d) => { location.hash = d.playback_url; }, (e) => fail("Playback link", e)) }, "Playback");
-    const actions = h("div", { class: "alarm-actions" }, canAct ? [comment, ack, minutes, reason, shelve, oneShot, unshelve] : null,
-      toggle, playback);
+    const lock = h("button", { type: "button", onclick: () => void run(`Lock the footage of alarm ${a.id}`,
+      () => request("POST", "/api/locks", { body: { alarm_id: a.id, note: `alarm ${a.id}: ${a.name}` } })) },
+    "Lock footage");
+    const actions = h("div", { class: "alarm-actions" },
+      canAct ? [comment, ack, minutes, reason, shelve, oneShot, unshelve, lock] : null, toggle, playback);
     const tr = h("tr", { "data-alarm": String(a.id) }, ...cells, h("td", null, actions, history));
 
     async function showHistory(): Promise<void> {

@@ -2,7 +2,7 @@
 // files) through hls.js, at 1/8x to 16x, the right camera kept in step with the left. Paused, the page shows
 // the server-decoded frames (GET /api/playback/frame) of both cameras at exactly the same capture, with that
 // frame's recorded telemetry; `,` and `.` step one recorded frame back or forward. Bookmarks, evidence
-// locks and export of the range.
+// locks and export of the range. Replays of the range (playback_replay.ts) are drawn beside the live tracks.
 import Hls from "hls.js";
 import { api, ApiError } from "../api/client";
 import { type Bookmark, type Camera, type FrameTelemetry, type Lock, playbackFrame, rec } from "../api/recordings";
@@ -11,6 +11,7 @@ import { fromLocalInput, num, time, toLocalInput } from "../lib/format";
 import { atLeast } from "../lib/session";
 import { MetricView, type XY } from "../lib/plots";
 import { drawStrip, type Marks, Timeline } from "../lib/timeline";
+import { replayPanel, type TrackDetail } from "./playback_replay";
 import type { Page, PageContext } from "./types";
 
 const RATES = [0.125, 0.25, 0.5, 1, 2, 4, 8, 16];
@@ -20,6 +21,18 @@ const MAX_TRACKS = 40; // trajectories drawn for a range
 
 function why(e: unknown): string {
   return e instanceof ApiError ? e.detail : e instanceof Error ? e.message : String(e);
+}
+
+/** Plan (x, z) and side (z, height) polylines of trajectories, one per track (null-separated). */
+function views(tracks: TrackDetail[]): XY[] {
+  const p: XY = [[], []], q: XY = [[], []];
+  for (const t of tracks) {
+    for (const pt of t.trajectory) {
+      p[0].push(pt.x); p[1].push(pt.z); q[0].push(pt.z); q[1].push(-pt.y);
+    }
+    p[0].push(null); p[1].push(null); q[0].push(null); q[1].push(null);
+  }
+  return [p, q];
 }
 
 export function playbackPage(ctx: PageContext): Page {
@@ -57,6 +70,8 @@ export function playbackPage(ctx: PageContext): Page {
   const marksList = h("ul", { class: "marks" });
   const planEl = h("div", { class: "plot-box tall" });
   const sideEl = h("div", { class: "plot-box tall" });
+  const tracksPanel = h("section", { class: "panel" }, h("h2", null, "Tracks in the range (3-D: plan and side views)"),
+    h("div", { class: "track-plots" }, h("div", { class: "plot" }, planEl), h("div", { class: "plot" }, sideEl)));
   const roleHint = operator ? null : h("p", { class: "muted" }, "Bookmarks, locks and exports need the operator role.");
   ctx.root.replaceChildren(h("section", { class: "page wide" }, h("h1", null, "Playback"), form, msg,
     h("div", { class: "timeline" }, strip, scrub),
@@ -67,12 +82,18 @@ export function playbackPage(ctx: PageContext): Page {
     h("div", { class: "playback-side" }, h("section", { class: "panel" }, h("h2", null, "This frame"), telOut),
       h("section", { class: "panel" }, h("h2", null, "Evidence"), field("Note", note), bmBtn, lockBtn, exportBtn,
         exportOut, roleHint, marksList)),
-    h("section", { class: "panel" }, h("h2", null, "Tracks in the range (3-D: plan and side views)"),
-      h("div", { class: "track-plots" }, h("div", { class: "plot" }, planEl), h("div", { class: "plot" }, sideEl)))));
+    tracksPanel));
   const plan = new MetricView(planEl, { title: "Plan view", xLabel: "x (m, right)", yLabel: "z (m, ahead)", minSpan: 4,
-    series: [{ label: "trajectories", stroke: "#ffb020" }] });
+    series: [{ label: "trajectories", stroke: "#ffb020" }, { label: "replay", stroke: "#e040fb" }] });
   const side = new MetricView(sideEl, { title: "Side view", xLabel: "z (m, ahead)", yLabel: "height (m)", minSpan: 2,
-    series: [{ label: "trajectories", stroke: "#4fd1ff" }] });
+    series: [{ label: "trajectories", stroke: "#4fd1ff" }, { label: "replay", stroke: "#e040fb" }] });
+  let live: XY[] = [[[], []], [[], []]], replayed: XY[] = [[[], []], [[], []]];
+  const replays = replayPanel(operator, (tracks) => {
+    replayed = views(tracks);
+    plan.setData([live[0], replayed[0]], [], []);
+    side.setData([live[1], replayed[1]], [], []);
+  });
+  tracksPanel.after(replays.el);
 
   let t0 = now - 300, t1 = now, cursor = now - 300;
   let tl = new Timeline([]);
@@ -120,6 +141,7 @@ export function playbackPage(ctx: PageContext): Page {
         alarms: alarms.filter((a) => a.activated_at <= t1 && (a.cleared_at ?? t1) >= t0) };
       showMarks(bms, locks);
       void trajectories(tracks.slice(0, MAX_TRACKS).map((t) => t.id));
+      void replays.load(t0, t1);
     } catch (e) {
       msg.show(`Recordings could not be loaded: ${why(e)}`, "bad");
       return;
@@ -143,16 +165,9 @@ export function playbackPage(ctx: PageContext): Page {
   /** Plan (x, z) and side (z, height) views of the tracks' trajectories, one polyline each. */
   async function trajectories(ids: number[]): Promise<void> {
     const tracks = await Promise.all(ids.map((id) => api.track(id).catch(() => null)));
-    const p: XY = [[], []], q: XY = [[], []];
-    for (const t of tracks) {
-      if (!t) continue;
-      for (const pt of t.trajectory) {
-        p[0].push(pt.x); p[1].push(pt.z); q[0].push(pt.z); q[1].push(-pt.y);
-      }
-      p[0].push(null); p[1].push(null); q[0].push(null); q[1].push(null);
-    }
-    plan.setData([p], [], []);
-    side.setData([q], [], []);
+    live = views(tracks.filter((t): t is TrackDetail => t !== null));
+    plan.setData([live[0], replayed[0]], [], []);
+    side.setData([live[1], replayed[1]], [], []);
   }
 
   function showMarks(bms: Bookmark[], locks: Lock[]): void {
