@@ -84,9 +84,13 @@ def test_both_cameras_play_over_webrtc_and_the_overlay_is_the_frames(server: Ser
         assert page.get_by_test_id(f"cam-{cam}-state").inner_text() == "WebRTC"
     assert page.get_by_test_id("sb-video").inner_text() == "Video: WebRTC"
     # every frame on screen found its telemetry by RTP timestamp, and it is that frame's: the index the
-    # server stamped into the picture equals the frame number of the telemetry drawn over it
+    # server stamped into the picture equals the frame number of the telemetry drawn over it; the right
+    # camera's picture is the canvas its frames are painted into (its video element is invisible)
     stamps = [s for s in d1["stamps"] if s["frame"] is not None]
-    assert len(stamps) >= 60, d1["stamps"][-5:]
+    for cam in ("left", "right"):
+        assert sum(s["camera"] == cam for s in stamps) >= 60, (cam, d1["stamps"][-5:])
+    assert page.locator('[data-camera="right"] canvas.picture').is_visible()
+    assert page.locator('[data-camera="right"] video').evaluate("v => getComputedStyle(v).opacity") == "0"
     same = sum(s["stamp"] == s["frame"] % 65536 for s in stamps)
     assert same >= 0.95 * len(stamps), [s for s in stamps if s["stamp"] != s["frame"] % 65536][:10]
     assert sum(s["offsetTicks"] == 0 for s in stamps) >= 0.9 * len(stamps)

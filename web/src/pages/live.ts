@@ -26,12 +26,22 @@ interface CamView {
   frame: HTMLElement;
   video: HTMLVideoElement;
   img: HTMLImageElement;
+  /** the right camera's picture over WebRTC: each frame the video presents, painted (see PAINTED) */
+  picture: HTMLCanvasElement | null;
   canvas: HTMLCanvasElement;
   state: HTMLElement;
   frames: number;
   shown: Telemetry | null;
   lastSync: string;
 }
+
+/** The cameras whose WebRTC video is shown by painting each presented frame into a canvas, the video
+ * element itself kept invisible (opacity 0: decoded, presented and called back, not composited). Chromium
+ * takes a page with more than one visible video layer for a video conference: unless the page draws faster
+ * than 30 frames per second it halves the compositor's rate to 30 Hz (cc::FrameRateEstimator), and two
+ * 30 fps streams whose frames arrive with some jitter then lose one frame in five or six (measured: 24 to 25
+ * shown per second of 30 decoded, against 28 with one visible video layer). */
+const PAINTED: ReadonlySet<Camera> = new Set<Camera>(["right"]);
 
 /** What tests and the curious can read: window.__tmeye. */
 interface Debug {
@@ -48,16 +58,28 @@ interface Debug {
   size: [number, number];
   /** with window.__tmeyeVerifyStamps (tests, server --stamp-frames): the frame index stamped in the left
    * picture on screen and the frame of the telemetry drawn over it */
-  stamps: { stamp: number; frame: number | null; offsetTicks: number | null }[];
+  stamps: { camera: Camera; stamp: number; frame: number | null; offsetTicks: number | null }[];
 }
 
 const STAMP_BITS = 16, STAMP_CELL = 8;
 let stampCanvas: HTMLCanvasElement | null = null;
 
+/** Paint the frame a video presents now into a canvas of the video's own size (CSS scales it like the video). */
+function paint(picture: HTMLCanvasElement, video: HTMLVideoElement): void {
+  const w = video.videoWidth, h = video.videoHeight;
+  if (!w || !h) return;
+  if (picture.width !== w || picture.height !== h) {
+    picture.width = w;
+    picture.height = h;
+  }
+  picture.getContext("2d", { alpha: false })?.drawImage(video, 0, 0, w, h);
+}
+
 /** The frame index the server's measurement mode (--stamp-frames) draws in the top-left corner: 16 cells of
  * 8x8 px, most significant bit first, white for 1. */
-function readStamp(video: HTMLVideoElement, srcW: number): number | null {
-  const scale = video.videoWidth > 0 ? video.videoWidth / srcW : 1;
+function readStamp(video: HTMLVideoElement | HTMLCanvasElement, srcW: number): number | null {
+  const width = video instanceof HTMLVideoElement ? video.videoWidth : video.width;
+  const scale = width > 0 ? width / srcW : 1;
   const w = STAMP_BITS * STAMP_CELL;
   stampCanvas ??= document.createElement("canvas");
   stampCanvas.width = w;
@@ -105,6 +127,7 @@ export function livePage(ctx: PageContext): Page {
       "aria-hidden": "true" });
     video.muted = true;
     const img = h("img", { alt: "", hidden: true });
+    const picture = PAINTED.has(camera) ? h("canvas", { class: "picture", hidden: true, "aria-hidden": "true" }) : null;
     const canvas = h("canvas", { class: "overlay", "aria-hidden": "true" });
     const frame = h("div", {
       class: "cam-frame", role: "img",
@@ -112,11 +135,11 @@ export function livePage(ctx: PageContext): Page {
         ? "Click to point the mount there; click a detection box to make it the primary target " +
           "(from the keyboard: Go to, and Make primary in the detections list)."
         : "Click to point the mount there (from the keyboard: Go to).") : ""}`,
-    }, video, img, canvas);
+    }, video, img, picture, canvas);
     const state = h("span", { class: "cam-state", "data-testid": `cam-${camera}-state` }, "connecting…");
     const fig = h("figure", { class: "cam", "data-camera": camera }, frame,
       h("figcaption", null, h("span", null, title), state));
-    return { camera, fig, frame, video, img, canvas, state, frames: 0, shown: null, lastSync: "" };
+    return { camera, fig, frame, video, img, picture, canvas, state, frames: 0, shown: null, lastSync: "" };
   };
   const cams: Record<Camera, CamView> = { left: makeCam("left", "Left camera"), right: makeCam("right", "Right camera") };
 
@@ -520,11 +543,12 @@ export function livePage(ctx: PageContext): Page {
       debug.sync[cam.camera] = { rtp: rtp ?? -1, frame: m?.msg.frame ?? null, offsetTicks: m?.offsetTicks ?? null,
         matched: m ? (m.offsetTicks === 0 ? "exact" : "near") : "none" };
       const tel = m?.msg ?? null;
-      if (cam.camera === "left" && (window as unknown as { __tmeyeVerifyStamps?: boolean }).__tmeyeVerifyStamps) {
-        const st = readStamp(v, srcW);
+      if (cam.picture) paint(cam.picture, v);
+      if ((window as unknown as { __tmeyeVerifyStamps?: boolean }).__tmeyeVerifyStamps) {
+        const st = readStamp(cam.picture ?? v, srcW); // what is on screen: the painted picture where there is one
         if (st !== null) {
-          debug.stamps.push({ stamp: st, frame: tel?.frame ?? null, offsetTicks: m?.offsetTicks ?? null });
-          if (debug.stamps.length > 600) debug.stamps.shift();
+          debug.stamps.push({ camera: cam.camera, stamp: st, frame: tel?.frame ?? null, offsetTicks: m?.offsetTicks ?? null });
+          if (debug.stamps.length > 1200) debug.stamps.shift();
         }
       }
       drawCam(cam, tel, sync);
@@ -540,16 +564,23 @@ export function livePage(ctx: PageContext): Page {
     v.requestVideoFrameCallback(cb);
   };
 
-  // without frame timestamps (MJPEG, no video) the overlay shows the latest telemetry
+  // without frame timestamps (MJPEG, no video) the overlay shows the latest telemetry, drawn at the display's
+  // rate; with WebRTC the video's frame callbacks draw it, and no idle animation frames are asked for
   let raf = 0;
   const drawLatest = () => {
+    raf = 0;
+    if (source === "webrtc" || disposed) return;
     raf = requestAnimationFrame(drawLatest);
-    if (source === "webrtc") return;
     const sync = source === "mjpeg" ? "latest (MJPEG)" : "latest (no video)";
     drawCam(cams.left, buffer.latest, sync);
     drawCam(cams.right, buffer.latest, sync);
   };
-  raf = requestAnimationFrame(drawLatest);
+  const setSource = (s: Source) => {
+    source = s;
+    debug.source = s;
+    if (s !== "webrtc" && !raf) raf = requestAnimationFrame(drawLatest);
+  };
+  setSource("none");
   cleanups.push(() => cancelAnimationFrame(raf));
 
   const setCamState = (text: string, tone = "info") => {
@@ -567,12 +598,13 @@ export function livePage(ctx: PageContext): Page {
     for (const c of Object.values(cams)) {
       c.video.srcObject = null;
       c.video.hidden = true;
+      c.video.classList.remove("painted");
+      if (c.picture) c.picture.hidden = true;
       c.img.removeAttribute("src");
       c.img.hidden = true;
       c.frame.classList.remove("has-video");
     }
-    source = "none";
-    debug.source = source;
+    setSource("none");
   };
 
   const useMjpeg = async (gen: number, why: string): Promise<boolean> => {
@@ -592,8 +624,7 @@ export function livePage(ctx: PageContext): Page {
       c.img.src = `/api/live/${c.camera}.mjpeg?t=${Date.now()}`;
       c.frame.classList.add("has-video");
     }
-    source = "mjpeg";
-    debug.source = source;
+    setSource("mjpeg");
     setCamState("MJPEG", "ok");
     videoNote.textContent = why;
     status.slot("video", "Video: MJPEG", "ok");
@@ -634,12 +665,15 @@ export function livePage(ctx: PageContext): Page {
         cams.right.video.srcObject = r.right;
         for (const c of Object.values(cams)) {
           c.video.hidden = false;
+          if (c.picture) {
+            c.video.classList.add("painted");
+            c.picture.hidden = false;
+          }
           c.frame.classList.add("has-video");
           void c.video.play().catch(() => undefined);
           onVideoFrame(c, gen);
         }
-        source = "webrtc";
-        debug.source = source;
+        setSource("webrtc");
         setCamState("WebRTC", "ok");
         status.slot("video", "Video: WebRTC", "ok");
         return;
