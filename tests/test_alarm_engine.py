@@ -90,9 +90,20 @@ def test_a_single_frame_detection_raises_nothing_and_ticks_hold_the_value() -> N
     e = engine(BOX)
     assert e.step(at(0, person(tid=7))) == []
     assert e.step(at(0.1, person(tid=8, z=20))) == []
-    assert kinds(e.step(at(0.2, person(tid=8)))) == ["activated"]
+    assert e.step(at(0.2, person(tid=8))) == []  # inside in one frame of the track so far
+    assert kinds(e.step(at(0.3, person(tid=8)))) == ["activated"]
     assert e.step(at(5.0, frame=None)) == []  # no frame: still active
     assert e.points["rule:1"].active
+
+
+def test_one_frame_whose_position_is_off_raises_nothing() -> None:
+    """A confirmed track measured inside the zone in one frame only (a disparity outlier near the zone's
+    far face) raises nothing; two frames in a row do."""
+    e = engine(BOX)
+    frames = [person(z=8.6), person(z=8.5), person(z=7.9), person(z=8.5), person(z=8.4)]
+    assert [kinds(e.step(at(0.1 * i, p))) for i, p in enumerate(frames)] == [[]] * 5
+    assert e.step(at(0.5, person(z=7.8))) == []
+    assert kinds(e.step(at(0.6, person(z=7.7)))) == ["activated"]
 
 
 def test_lifecycle_ack_then_clear_and_clear_before_ack() -> None:
@@ -107,9 +118,11 @@ def test_lifecycle_ack_then_clear_and_clear_before_ack() -> None:
     c = e.step(at(0.4, person(z=9)))[0]
     assert (c.kind, c.state_to) == ("cleared", "normal")
     # a second occurrence, cleared before acknowledgement, re-alarms, then is acknowledged
+    assert e.step(at(0.9, person(z=4))) == []  # a condition counts from its second frame in a row
     b = e.step(at(1.0, person(z=4)))[0]
     assert b.opened and b.occurrence != a.occurrence
     assert e.step(at(1.2, person(z=9)))[0].state_to == "rtn_unack"
+    assert e.step(at(1.25, person(z=4))) == []
     again = e.step(at(1.3, person(z=4)))[0]
     assert (again.state_from, again.state_to, again.opened, again.occurrence) == ("rtn_unack", "unack", False,
                                                                                   b.occurrence)
@@ -251,6 +264,7 @@ def test_one_shot_shelving_lasts_until_the_alarm_clears() -> None:
     assert [(x.kind, x.state_to, x.comment) for x in u] == [("unshelved", "normal",
                                                             "one-shot shelving ended: the alarm cleared")]
     assert e.points["rule:1"].occurrence is None
+    assert e.step(at(10.9, person(z=4))) == []
     b = e.step(at(11.0, person(z=4)))  # the next activation is annunciated again
     assert [(x.kind, x.opened) for x in b] == [("activated", True)]
     e.step(at(11.1, person(z=9)))

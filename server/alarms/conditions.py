@@ -14,7 +14,9 @@ Conditions:
 - `Fault`: a built-in device fault source reports a fault.
 Conditions on targets are evaluated per target (per track id): a target counts once its track has been
 seen in `MIN_HITS` frames (the tracker's own confirmation), so a single-frame false detection raises
-nothing; a track missing from a frame (a detection gap) keeps the value it had when last seen for
+nothing, and its condition once it held in `MIN_HITS` consecutive frames of the track, so a single frame
+whose position is off (a disparity outlier near a zone's face) raises nothing either; a track missing from
+a frame (a detection gap) keeps the value it had when last seen for
 `HOLD_S`, as long as the tracker itself keeps a track without detections, so a person standing in a zone
 who is not detected for a second does not clear the alarm and raise it again. The hold ends early when
 another track is seen where the missing one could be by now (within `REACQUIRE_M` + `REACQUIRE_MPS`
@@ -205,11 +207,13 @@ def condition_to_dict(c: Condition) -> dict[str, Any]:
 
 @dataclass
 class Memory:
-    """A rule's memory across snapshots, per track: frames seen, time last seen, the condition's value when
+    """A rule's memory across snapshots, per track: frames seen, consecutive frames the condition held, time
+    last seen, the condition's value when
     last seen, dwell start; and the time the closing speed went above the threshold (approach), when it
     was last known, the time the primary was last seen (lost)."""
 
     seen: dict[int, int] = field(default_factory=dict)
+    run: dict[int, int] = field(default_factory=dict)
     last_seen: dict[int, float] = field(default_factory=dict)
     held: dict[int, bool] = field(default_factory=dict)
     last_pos: dict[int, tuple[float, float, float]] = field(default_factory=dict)
@@ -229,10 +233,11 @@ def per_target(snap: Snapshot, mem: Memory, test: Callable[[Target], bool]) -> l
         k = p.track_id
         mem.seen[k] = mem.seen.get(k, 0) + 1
         mem.last_seen[k] = snap.t
-        mem.held[k] = mem.seen[k] >= MIN_HITS and test(p)
+        mem.run[k] = mem.run.get(k, 0) + 1 if test(p) else 0
+        mem.held[k] = mem.seen[k] >= MIN_HITS and mem.run[k] >= MIN_HITS
         mem.last_pos[k] = (p.x, p.y, p.z)
     for k in [k for k, t in mem.last_seen.items() if t < snap.t and (snap.t - t > HOLD_S or _taken_up(snap, mem, k))]:
-        for d in (mem.seen, mem.last_seen, mem.held, mem.inside_since, mem.last_pos):
+        for d in (mem.seen, mem.last_seen, mem.run, mem.held, mem.inside_since, mem.last_pos):
             d.pop(k, None)
     for k, v in mem.held.items():
         if v:
