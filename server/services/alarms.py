@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from sqlalchemy import select, text
+from sqlalchemy.exc import OperationalError
 from sqlalchemy.orm import Session, sessionmaker
 
 from server.alarms.conditions import Snapshot
@@ -173,10 +174,13 @@ class AlarmService:
                     self._commit(self._unstored, None, None)
                     self._unstored = []
                 except Exception as exc:  # kept; tried again in a second
+                    # a full, read-only or locked database is a device fault (the database alarm), not a bug: one
+                    # line; anything else gets its traceback the first time
                     self._store_at = time.monotonic() + STORE_RETRY_S
-                    (log.exception if self._store_failures == 0 else log.warning)(
-                        "storing %d alarm transitions failed (kept, retried): %s", len(self._unstored),
-                        str(exc).splitlines()[0])
+                    bug = self._store_failures == 0 and not isinstance(exc, OperationalError)
+                    (log.exception if bug else log.warning)(
+                        "storing %d alarm transitions failed (kept, retried): %s: %s", len(self._unstored),
+                        type(exc).__name__, str(exc).splitlines()[0])
                     self._store_failures += 1
                 else:
                     self._store_failures = 0

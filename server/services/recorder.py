@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from sqlalchemy.exc import OperationalError
 from sqlalchemy.orm import Session, sessionmaker
 
 from server.services import segments
@@ -237,7 +238,10 @@ class Recorder:
         if first:
             self._retry_s = min(RETRY_MAX_S, max(DISK_CHECK_S, 2 * self._retry_s))
             self._retry_at = time.monotonic() + self._retry_s
-        (log.exception if first else log.error)("%s (retry in %.0f s)", self.fault, self._retry_s)
+        # a full disk or a database that cannot write is a device fault (the recording alarm): one line; anything
+        # else gets its traceback the first time
+        bug = first and not isinstance(exc, OSError | OperationalError)
+        (log.exception if bug else log.error)("%s (retry in %.0f s)", self.fault, self._retry_s)
         for cam in self.cameras.values():
             if cam.muxer is not None:
                 cam.close()
