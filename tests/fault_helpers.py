@@ -9,6 +9,7 @@ import shutil
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 from server_helpers import Server, launch
 
@@ -64,3 +65,9 @@ def fill(path: Path, leave_bytes: int = 0) -> int:
                 if exc.errno != errno.ENOSPC:
                     raise
                 return n
+
+
+def open_alarms(client: Any, rule_key: str) -> list[dict[str, Any]]:
+    """The open alarms of one rule (e.g. "fault:servo"), as the API lists them."""
+    alarms: list[dict[str, Any]] = client.get("/api/alarms", params={"state": "open"}).json()
+    return [a for a in alarms if a["rule_key"] == rule_key]

@@ -15,6 +15,7 @@ from typing import Any
 
 import pytest
 import websockets
+from fault_helpers import open_alarms
 from server_helpers import Server, start_server
 
 NEAR = {"name": "anyone near", "priority": "critical", "on_delay_s": 0, "off_delay_s": 3,
@@ -252,8 +253,8 @@ def maestro_server(tmp_path: Path) -> Iterator[tuple[Server, Any]]:
 def test_servo_port_closed_raises_a_fault_within_1s_and_clears_within_2s(maestro_server: tuple[Server, Any]) -> None:
     server, dev = maestro_server
     with server.as_admin() as c:
-        def servo_alarm() -> Any:
-            return [a for a in c.get("/api/alarms", params={"state": "open"}).json() if a["rule_key"] == "fault:servo"]
+        def servo_alarm() -> list[dict[str, Any]]:
+            return open_alarms(c, "fault:servo")
         time.sleep(2.0)
         assert servo_alarm() == []
         frame0 = c.get("/api/status").json()["frame"]

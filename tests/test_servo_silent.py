@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from fault_helpers import open_alarms
 from server_helpers import Server, start_server
 from test_servo_serial import FakeMaestro, PtyDevice
 
@@ -37,8 +38,8 @@ def test_silent_servo_raises_a_fault_within_1s_clears_within_2s_and_tracking_goe
         silent_server: tuple[Server, PtyDevice]) -> None:
     server, dev = silent_server
     with server.as_admin() as c:
-        def servo_alarm() -> Any:
-            return [a for a in c.get("/api/alarms", params={"state": "open"}).json() if a["rule_key"] == "fault:servo"]
+        def servo_alarm() -> list[dict[str, Any]]:
+            return open_alarms(c, "fault:servo")
         time.sleep(2.0)
         assert servo_alarm() == []
         frame0 = c.get("/api/status").json()["frame"]
