@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tracker.bgdepth import BackgroundDepth
+from tracker.budget import BudgetConfig, VerifyBudget
 from tracker.detect import DetectorConfig, StereoSubtractor, paint_masks
 from tracker.frames import StereoFrame
 from tracker.geometry import StereoRig
@@ -58,12 +59,14 @@ class Pipeline:
     """Composes the stages for one rig. Learn the background first (`learn_background`)."""
 
     def __init__(self, rig: StereoRig, detector: DetectorConfig | None = None,
-                 tracker: TrackerConfig | None = None, origin: F64 | None = None):
+                 tracker: TrackerConfig | None = None, origin: F64 | None = None,
+                 budget: BudgetConfig | None = None):
         self.rig = rig
         self.rect = Rectifier(rig)
         self.bg = BackgroundDepth(self.rect, near_m=(detector or DetectorConfig()).near_m)
         self.subtractor = StereoSubtractor(self.bg, detector)
         self.verifier = Verifier(self.subtractor, self.rect)
+        self.budget = VerifyBudget(self.subtractor.low_shape, self.subtractor.cfg.stride, budget)
         self.localizer = Localizer(self.rect, origin)
         self.tracker = MultiTracker(tracker)
         self._last_gain = 1.0
@@ -82,6 +85,7 @@ class Pipeline:
         t1 = time.perf_counter()
         hints = self.tracker.predictions(frame.t)
         boxes = cands.worth_verifying(self.subtractor.cfg.moving_min_cells, hints)
+        boxes = self.budget.select(boxes, dict(zip(cands.boxes, cands.cells, strict=True)), hints)
         blobs = [b for box in boxes for b in self.verifier.verify_all(frame, box, hints)]
         t2 = time.perf_counter()
         locs = [self.localizer.locate(b.centroid_rect, b.disparity, b.disparity_sigma, b.area, frame.gimbal)
