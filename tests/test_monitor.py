@@ -9,7 +9,7 @@ import contextlib
 import threading
 import time
 
-from server.services.monitor import Monitor
+from server.services.monitor import Monitor, Samples, percentiles
 
 
 def test_figures_while_the_loop_adds_samples() -> None:
@@ -32,3 +32,15 @@ def test_figures_while_the_loop_adds_samples() -> None:
         loop.call_soon_threadsafe(task.cancel)
         t.join()
         loop.close()
+
+
+def test_samples_keep_the_last_window_in_fixed_memory() -> None:
+    s = Samples(5)
+    before = (s.t.nbytes + s.v.nbytes, s.t.ctypes.data)
+    for i in range(12):
+        s.add(float(i), 10.0 * i)
+    assert len(s) == 5 and (s.t.nbytes + s.v.nbytes, s.t.ctypes.data) == before
+    assert sorted(s.since(0.0).tolist()) == [70.0, 80.0, 90.0, 100.0, 110.0]  # the oldest were overwritten
+    assert sorted(s.since(9.5).tolist()) == [100.0, 110.0]
+    assert percentiles(s.since(0.0)) == {"n": 5, "p50": 90.0, "p99": 110.0, "max": 110.0}
+    assert percentiles([])["p50"] is None

@@ -6,17 +6,41 @@ from __future__ import annotations
 import asyncio
 import threading
 import time
-from collections import deque
+
+import numpy as np
 
 
-def percentiles(values: list[float]) -> dict[str, float | int | None]:
+def percentiles(values: list[float] | np.ndarray) -> dict[str, float | int | None]:
     """{"n", "p50", "p99", "max"} of values (ms), None when empty."""
-    v = sorted(values)
-    if not v:
+    v = np.sort(np.asarray(values, dtype=np.float64))
+    if not v.size:
         return {"n": 0, "p50": None, "p99": None, "max": None}
+
     def q(p: float) -> float:
-        return round(v[min(len(v) - 1, int(round(p * (len(v) - 1))))], 3)
-    return {"n": len(v), "p50": q(0.5), "p99": q(0.99), "max": round(v[-1], 3)}
+        return round(float(v[min(v.size - 1, int(round(p * (v.size - 1))))]), 3)
+    return {"n": int(v.size), "p50": q(0.5), "p99": q(0.99), "max": round(float(v[-1]), 3)}
+
+
+class Samples:
+    """The last `size` (time, value) samples in two preallocated arrays: the memory is taken once, at
+    start, however long the server runs (a deque of tuples grew by about 45 MB while it filled)."""
+
+    def __init__(self, size: int):
+        self.t = np.full(size, -np.inf)  # monotonic s; -inf: empty
+        self.v = np.zeros(size)
+        self.n = 0  # samples added since the start
+
+    def add(self, t: float, value: float) -> None:
+        i = self.n % self.t.size
+        self.t[i], self.v[i] = t, value
+        self.n += 1
+
+    def __len__(self) -> int:
+        return min(self.n, self.t.size)
+
+    def since(self, t0: float) -> np.ndarray:
+        """A copy of the values of the samples taken at t0 or later."""
+        return self.v[self.t >= t0].copy()
 
 
 class Monitor:
@@ -24,11 +48,11 @@ class Monitor:
 
     def __init__(self, window: int = 12000, send_window: int = 200000, period_s: float = 0.05):
         self.period_s = period_s
-        self.lag_ms: deque[tuple[float, float]] = deque(maxlen=window)  # (monotonic s, ms)
-        self.send_ms: deque[tuple[float, float]] = deque(maxlen=send_window)
-        self.delivery_ms: deque[tuple[float, float]] = deque(maxlen=send_window)
-        # the samples are added on the event loop and read by the status route in the thread pool: copying a
-        # deque while another thread appends raises "deque mutated during iteration" (a 500 of /api/status)
+        self.lag_ms = Samples(window)
+        self.send_ms = Samples(send_window)
+        self.delivery_ms = Samples(send_window)
+        # the samples are added on the event loop and read by the status route in the thread pool: the
+        # lock keeps a reader from seeing a time whose value is not written yet
         self._lock = threading.Lock()
 
     async def run(self) -> None:
@@ -37,21 +61,20 @@ class Monitor:
             await asyncio.sleep(self.period_s)
             t1 = time.perf_counter()
             with self._lock:
-                self.lag_ms.append((time.monotonic(), max(0.0, (t1 - t0 - self.period_s) * 1e3)))
+                self.lag_ms.add(time.monotonic(), max(0.0, (t1 - t0 - self.period_s) * 1e3))
 
     def sent(self, captured_at: float, processed_at: float) -> None:
         """A telemetry message went out: capture -> send, and the part after the tracker was done."""
         now, mono = time.time(), time.monotonic()
         with self._lock:
-            self.send_ms.append((mono, (now - captured_at) * 1e3))
-            self.delivery_ms.append((mono, (now - processed_at) * 1e3))
+            self.send_ms.add(mono, (now - captured_at) * 1e3)
+            self.delivery_ms.add(mono, (now - processed_at) * 1e3)
 
     def figures(self, window_s: float = 60.0) -> dict[str, dict[str, float | int | None]]:
         """Percentiles of the samples of the last window_s seconds (the window holds at most 10 minutes of lag
         samples and 200,000 sends)."""
         since = time.monotonic() - window_s
         with self._lock:  # only the copies under the lock; the sorting after it
-            lag, send, delivery = list(self.lag_ms), list(self.send_ms), list(self.delivery_ms)
-        return {"event_loop_lag_ms": percentiles([v for t, v in lag if t >= since]),
-                "ws_send_latency_ms": percentiles([v for t, v in send if t >= since]),
-                "ws_delivery_ms": percentiles([v for t, v in delivery if t >= since])}
+            lag, send, delivery = (s.since(since) for s in (self.lag_ms, self.send_ms, self.delivery_ms))
+        return {"event_loop_lag_ms": percentiles(lag), "ws_send_latency_ms": percentiles(send),
+                "ws_delivery_ms": percentiles(delivery)}
