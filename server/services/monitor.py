@@ -27,7 +27,7 @@ class Samples:
 
     def __init__(self, size: int):
         self.t = np.full(size, -np.inf)  # monotonic s; -inf: empty
-        self.v = np.zeros(size)
+        self.v = np.full(size, 0.0)  # written now: its pages count from the start, not as the ring fills
         self.n = 0  # samples added since the start
 
     def add(self, t: float, value: float) -> None:
