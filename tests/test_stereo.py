@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from tracker.frames import FrameError
-from tracker.stereo import RegionMatch, match_point, match_region
+from tracker.point_match import match_point
+from tracker.stereo import RegionMatch, match_region
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 STEREO_GT = DATA / "stereo-gt"
@@ -221,3 +222,24 @@ def test_middlebury_accuracy(name: str) -> None:
     assert med <= 0.25
     assert none_frac <= 0.2
     assert np.mean(np.array(errors) > 1.0) < 0.1  # gross mismatches are rare
+
+
+def test_match_point_answers_with_the_window_most_others_agree_with(monkeypatch: pytest.MonkeyPatch) -> None:
+    import tracker.point_match as pm
+
+    img = np.zeros((40, 60), np.uint8)
+
+    def answers(by_shift: dict[tuple[int, int], tuple[float, float] | None]) -> float | None:
+        def fake(_l: object, _r: object, x: float, y: float, _d: int, **_k: object) -> tuple[float, float] | None:
+            return by_shift[(round(x) - 30, round(y) - 20)]
+        monkeypatch.setattr(pm, "match_window", fake)
+        return pm.match_point(img, img, 30.0, 20.0, 16)
+
+    # the centre straddles an edge (d 3.0); three shifted windows lie on the point's surface (d near 8)
+    assert answers({(0, 0): (3.0, 0.99), (-4, 0): (8.1, 0.9), (4, 0): (7.9, 0.8), (0, -4): (8.0, 0.7),
+                    (0, 4): None}) == 8.1  # three agree; the best score of those with most support
+    # two against two and a miss: fewer than 3 agree, no answer
+    assert answers({(0, 0): (3.0, 0.99), (-4, 0): (3.2, 0.9), (4, 0): (8.0, 0.8), (0, -4): (8.1, 0.7),
+                    (0, 4): None}) is None
+    with pytest.raises(ValueError, match="votes"):
+        pm.match_point(img, img, 30.0, 20.0, 16, votes=6)

@@ -1,5 +1,5 @@
 """Point matching on real rectified pairs with known disparity (Middlebury, ../shared/data/stereo-gt):
-tracker.stereo.match_point against OpenCV's StereoSGBM at the same textured points, in the same run.
+tracker.point_match.match_point against OpenCV's StereoSGBM at the same textured points, in the same run.
 
 Points: a grid every GRID_STEP px of the left image (im2.png) where the true disparity is known
 (disp2.png / scale, 0 = unknown), not occluded (the right view's truth disp6.png at x - d agrees within
@@ -17,7 +17,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from tracker.stereo import match_point
+from tracker.point_match import match_point
 
 F64 = NDArray[np.float64]
 U8 = NDArray[np.uint8]

@@ -22,12 +22,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tracker.frames import U8, check_pair
-from tracker.stereo_lk import refine_2d, support_weights
 
 F64 = NDArray[np.float64]
 F32 = NDArray[np.float32]
 
-_PAD = 2  # extra strip columns on each side for interpolation and the gradient
+PAD = 2  # extra strip columns on each side for interpolation and the gradient
 _MAX_ITER = 10
 _STEP_TOL = 5e-3  # px: the Gauss-Newton update that ends the iteration (it is still applied)
 
@@ -45,14 +44,14 @@ class RegionMatch:
 
 
 @dataclass(frozen=True)
-class _Fit:
+class StripFit:
     d: float
     sigma: float
     score: float
     gain: float
 
 
-def _check_images(left: object, right: object, max_disparity: object) -> tuple[U8, U8]:
+def check_images(left: object, right: object, max_disparity: object) -> tuple[U8, U8]:
     """Validate a rectified pair and the disparity bound; FrameError / ValueError with a one-line reason."""
     check_pair(left, right)
     if isinstance(max_disparity, bool) or not isinstance(max_disparity, (int, np.integer)):
@@ -120,13 +119,13 @@ def _forms(G: list[list[float]], j: int, u: list[float], v: list[float]) -> tupl
     )
 
 
-def _refine(T: NDArray[np.floating], S: NDArray[np.floating], w: F64 | None, p: float, k: int) -> _Fit | None:
+def refine_strip(T: NDArray[np.floating], S: NDArray[np.floating], w: F64 | None, p: float, k: int) -> StripFit | None:
     """Gauss-Newton (1-D Lucas-Kanade) refinement of the strip position p of template T in strip S.
 
     T: (h, n); S: (h, m) with S[:, j] at right-image position XS + j; w: weights (h*n,) or None. The
     template at strip position p samples the strip at p, p+1, .., p+n-1 (Catmull-Rom interpolation along
     the row); the model is T ~ alpha R(p) + beta. Needs 2 <= k and k + 3 + n <= m; p must stay in
-    [k - 1, k + 2). Returns _Fit with d = -p (caller adds X0 - XS) or None if p leaves that range or the
+    [k - 1, k + 2). Returns StripFit with d = -p (caller adds X0 - XS) or None if p leaves that range or the
     fit is degenerate (no horizontal texture, non-positive gain).
     """
     G = _band_gram(T, S, w, k)
@@ -151,7 +150,7 @@ def _refine(T: NDArray[np.floating], S: NDArray[np.floating], w: F64 | None, p: 
             resid = max(tt - alpha * pt - gamma * qt, 0.0)  # sum w r^2 at the least-squares solution
             sigma = math.sqrt(resid / max(wsum - 3.0, 1.0) * a / det) / alpha
             score = pt / math.sqrt(a * tt) if tt > 0.0 else 0.0
-            return _Fit(-(p + dp), sigma, score, alpha)
+            return StripFit(-(p + dp), sigma, score, alpha)
         p += max(-1.0, min(1.0, dp))
     return None  # pragma: no cover - the loop always returns
 
@@ -175,19 +174,6 @@ def _second_peak(r: list[float], k: int) -> float:
     return max(rest) if rest else -1.0
 
 
-def _lr_consistent(left: U8, right: U8, x: float, xr: float, y: float, h: int, dmax: int, tol: float) -> bool:
-    """Integer right-to-left search from (xr, y); True if it lands within tol px of x."""
-    xri, yi = round(xr), round(y)
-    W = left.shape[1]
-    hi = min(xri + h + dmax, W - 1)
-    if xri - h < 0 or hi - xri - h < 2:
-        return False
-    templ = right[yi - h : yi + h + 1, xri - h : xri + h + 1]
-    strip = left[yi - h : yi + h + 1, xri - h : hi + 1]
-    r = cv2.matchTemplate(strip, templ, cv2.TM_CCOEFF_NORMED)[0]
-    return abs(xri + int(np.argmax(r)) - x) <= tol
-
-
 def _zncc_weighted(S: NDArray[np.floating], T: NDArray[np.floating], w: NDArray[np.floating]) -> F64:
     """Weighted zero-mean normalised cross-correlation of template T (h, n) with weights w (h, n) at every
     column position of strip S (h, m): shape (m - n + 1,), -1 where a window is flat. Direct sums (OpenCV's
@@ -205,113 +191,31 @@ def _zncc_weighted(S: NDArray[np.floating], T: NDArray[np.floating], w: NDArray[
     return np.asarray(np.where(den > 1e-6, num / np.maximum(den, 1e-12), -1.0), dtype=np.float64)
 
 
-def _match(
+def match_strip(
     T: F32, S: F32, w: F32 | None, offset: int, span: int, min_score: float, uniqueness: float
-) -> _Fit | None:
+) -> StripFit | None:
     """Integer ZNCC search (cv2.matchTemplate) then Gauss-Newton refinement of a template in a strip.
 
-    T: template (h, n); S: strip (h, span + n + 2 * _PAD); w: weights (h, n) or None. Template column c
+    T: template (h, n); S: strip (h, span + n + 2 * PAD); w: weights (h, n) or None. Template column c
     lies at left position X0 + c, strip column j at right position XS + j, offset = X0 - XS, and the
-    candidate disparities d = offset - p for strip positions p = _PAD .. _PAD + span. Returns None if the
+    candidate disparities d = offset - p for strip positions p = PAD .. PAD + span. Returns None if the
     peak is on the border of the candidates, below min_score, within `uniqueness` of a second peak, or the
     refinement fails or moves by more than 1 px.
     """
     if w is None:
-        r = cv2.matchTemplate(S[:, _PAD:-_PAD], T, cv2.TM_CCOEFF_NORMED)[0].astype(np.float64)
+        r = cv2.matchTemplate(S[:, PAD:-PAD], T, cv2.TM_CCOEFF_NORMED)[0].astype(np.float64)
     else:
-        r = _zncc_weighted(S[:, _PAD:-_PAD], T, w)
+        r = _zncc_weighted(S[:, PAD:-PAD], T, w)
     kk = int(np.argmax(r))
     if kk == 0 or kk == span or float(r[kk]) < min_score:
         return None
     if float(r[kk]) - _second_peak(r.tolist(), kk) < uniqueness:
         return None
-    p0 = kk + _PAD + _subpixel_peak(r, kk)
-    fit = _refine(T, S, None if w is None else w.ravel().astype(np.float64), p0, kk + _PAD)
+    p0 = kk + PAD + _subpixel_peak(r, kk)
+    fit = refine_strip(T, S, None if w is None else w.ravel().astype(np.float64), p0, kk + PAD)
     if fit is None or abs(fit.d + p0) > 1.0:
         return None
-    return _Fit(offset + fit.d, fit.sigma, fit.score, fit.gain)
-
-
-def match_point(
-    left: U8,
-    right: U8,
-    x: float,
-    y: float,
-    max_disparity: int,
-    *,
-    window: int = 11,
-    min_std: float = 2.0,
-    min_score: float = 0.5,
-    uniqueness: float = 0.05,
-    lr_tolerance: float = 1.5,
-    max_sigma: float = 0.2,
-    support_gamma: float = 15.0,
-    max_row_offset: float = 1.0,
-) -> float | None:
-    """Disparity d (px) of the left point (x, y) in a rectified pair, right x = x - d; None if unreliable.
-
-    left, right: rectified grey uint8 (H, W). window: odd square window side (px), centred on the pixel
-    column nearest x and on row y (sub-pixel, interpolated in both images alike); the disparity is assumed
-    constant over the window, whose pixels are weighted by their likeness to the centre (adaptive support
-    weights exp(-|ΔI| / support_gamma), support_gamma in grey levels). The integer search (weighted
-    ZNCC) is refined by tracker.stereo_lk.refine_2d, which fits a row offset of the right image beside
-    the disparity (real rectifications leave rows misaligned by a fraction of a pixel).
-    The match is rejected (None) when the window or the search strip does not fit in the image (the
-    search is clipped at the left edge), the window's grey-level standard deviation is below min_std, the
-    correlation peak lies on the border of the search range, its score is below min_score, a second
-    correlation peak comes within `uniqueness` of it, the refined disparity's 1-sigma exceeds max_sigma px,
-    it moved more than 1 px or the row offset exceeds max_row_offset px, or the right-to-left search does
-    not return within lr_tolerance px. Raises FrameError / ValueError (one-line message) for bad arguments.
-    """
-    left, right = _check_images(left, right, max_disparity)
-    if isinstance(window, bool) or not isinstance(window, int) or window < 3 or window % 2 == 0:
-        raise ValueError(f"window must be an odd integer >= 3, got {window!r}")
-    x, y = float(x), float(y)
-    if not (math.isfinite(x) and math.isfinite(y)):
-        raise ValueError(f"point must be finite, got ({x}, {y})")
-    H, W = left.shape
-    h = window // 2
-    xc = round(x)
-    if not (h <= y < H - h - 1 and xc + h + _PAD < W):
-        return None
-    dmax = min(max_disparity, xc - h - _PAD)  # clip the search at the image's left edge
-    if dmax < 2:
-        return None
-    T = np.asarray(cv2.getRectSubPix(left, (window, window), (xc, y), patchType=cv2.CV_32F), np.float32)
-    if float(cv2.meanStdDev(T)[1][0, 0]) < min_std:
-        return None
-    xs0 = xc - h - dmax - _PAD  # image column of the strip's first column
-    ws = dmax + window + 2 * _PAD
-    S = np.asarray(
-        cv2.getRectSubPix(right, (ws, window), (xs0 + 0.5 * (ws - 1), y), patchType=cv2.CV_32F), np.float32
-    )
-    w = support_weights(T, support_gamma)
-    fit = _match(T, S, w, dmax + _PAD, dmax, min_score, uniqueness)
-    if fit is None:
-        return None
-    fine = refine_2d(T, right, xc, y, fit.d, w)
-    if fine is None or fine.sigma > max_sigma or abs(fine.d - fit.d) > 1.0 or abs(fine.dy) > max_row_offset:
-        return None
-    d = _refine_on_row(T, right, w, xs0, ws, y + fine.dy, dmax + _PAD - fine.d)
-    if d is None or abs(d - fine.d) > 0.5 or not 0.0 <= d <= max_disparity:
-        return None
-    if not _lr_consistent(left, right, x, x - d, y, h, max_disparity, lr_tolerance):
-        return None
-    return d
-
-
-def _refine_on_row(T: F32, right: U8, w: F32, xs0: int, ws: int, y: float, p0: float) -> float | None:
-    """The 1-D Catmull-Rom refinement (not pixel-locked) on the right strip sampled at row y (the
-    2-D fit's row offset applied) from strip position p0, with the same weights as the 2-D fit.
-    Returns the disparity (px) or None."""
-    S = np.asarray(cv2.getRectSubPix(right, (ws, T.shape[0]), (xs0 + 0.5 * (ws - 1), y), patchType=cv2.CV_32F),
-                   np.float32)
-    k = math.floor(p0)
-    if not 2 <= k <= ws - T.shape[1] - 3:
-        return None
-    fit = _refine(T, S, w.ravel().astype(np.float64), p0, k)
-    offset = ws - T.shape[1] - _PAD  # strip position p <-> disparity d = offset - p
-    return None if fit is None else offset + fit.d
+    return StripFit(offset + fit.d, fit.sigma, fit.score, fit.gain)
 
 
 def match_region(
@@ -337,7 +241,7 @@ def match_region(
     `uniqueness`, or the refinement fails. sigma comes from the Gauss-Newton normal matrix scaled by the
     residual variance, so it assumes independent pixel noise.
     """
-    left, right = _check_images(left, right, max_disparity)
+    left, right = check_images(left, right, max_disparity)
     m = np.asarray(mask)
     if m.ndim != 2 or m.size == 0:
         raise ValueError(f"mask must be a non-empty 2-D array, got shape {m.shape}")
@@ -348,20 +252,20 @@ def match_region(
     H, W = left.shape
     mh, mw = m.shape
     x0, y0 = int(x0), int(y0)
-    if x0 < 0 or y0 < 0 or x0 + mw + _PAD > W or y0 + mh > H or float(wgt.sum()) < 8.0:
+    if x0 < 0 or y0 < 0 or x0 + mw + PAD > W or y0 + mh > H or float(wgt.sum()) < 8.0:
         return None
     lo, hi = 0, max_disparity
     if d0 is not None:
         if not math.isfinite(d0):
             raise ValueError(f"d0 must be finite, got {d0}")
         lo, hi = max(0, math.floor(d0) - search_radius), min(max_disparity, math.ceil(d0) + search_radius)
-    hi = min(hi, x0 - _PAD)
+    hi = min(hi, x0 - PAD)
     if hi - lo < 2:
         return None
     T = left[y0 : y0 + mh, x0 : x0 + mw].astype(np.float32)
-    xs0 = x0 - hi - _PAD
-    S = right[y0 : y0 + mh, xs0 : x0 + mw - lo + _PAD].astype(np.float32)
-    fit = _match(T, S, wgt.astype(np.float32), hi + _PAD, hi - lo, min_score, uniqueness)
+    xs0 = x0 - hi - PAD
+    S = right[y0 : y0 + mh, xs0 : x0 + mw - lo + PAD].astype(np.float32)
+    fit = match_strip(T, S, wgt.astype(np.float32), hi + PAD, hi - lo, min_score, uniqueness)
     if fit is None:
         return None
     return RegionMatch(disparity=fit.d, sigma=fit.sigma, score=fit.score, gain=fit.gain)
@@ -373,23 +277,23 @@ def refine_region(
     """Like match_region with a good prior d0 (within about a pixel, e.g. a track's prediction): the
     Gauss-Newton refinement starts at d0 with no integer search. None when it leaves d0 ± 1 px, the fit
     degenerates or scores below min_score (then search with match_region)."""
-    left, right = _check_images(left, right, 0)
+    left, right = check_images(left, right, 0)
     if not math.isfinite(d0) or d0 < 0:
         raise ValueError(f"d0 must be finite and >= 0, got {d0}")
     m = np.asarray(mask)
     wgt = (m != 0) if not np.issubdtype(m.dtype, np.floating) else np.clip(np.nan_to_num(m), 0.0, 1.0)
     mh, mw = m.shape
     lo, hi = max(0, math.floor(d0) - 3), math.ceil(d0) + 3
-    if x0 - hi - _PAD < 0 or x0 + mw + _PAD > left.shape[1] or y0 < 0 or y0 + mh > left.shape[0]:
+    if x0 - hi - PAD < 0 or x0 + mw + PAD > left.shape[1] or y0 < 0 or y0 + mh > left.shape[0]:
         return None
     if float(wgt.sum()) < 8.0:
         return None
     T = left[y0 : y0 + mh, x0 : x0 + mw].astype(np.float32)
-    xs0 = x0 - hi - _PAD
-    S = right[y0 : y0 + mh, xs0 : x0 + mw - lo + _PAD].astype(np.float32)
-    offset = hi + _PAD  # strip position p <-> disparity d = offset - p
+    xs0 = x0 - hi - PAD
+    S = right[y0 : y0 + mh, xs0 : x0 + mw - lo + PAD].astype(np.float32)
+    offset = hi + PAD  # strip position p <-> disparity d = offset - p
     p0 = offset - d0
-    fit = _refine(T, S, wgt.astype(np.float64).ravel(), p0, math.floor(p0))
+    fit = refine_strip(T, S, wgt.astype(np.float64).ravel(), p0, math.floor(p0))
     if fit is None or abs(fit.d + p0) > 1.0 or fit.score < min_score:
         return None
     return RegionMatch(disparity=offset + fit.d, sigma=fit.sigma, score=fit.score, gain=fit.gain)

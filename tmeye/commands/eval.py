@@ -27,7 +27,7 @@ def register(subparsers: Any) -> None:
     p.add_argument("--minutes", type=float, default=10.0, help="simulated minutes of --alarms (default 10)")
     p.add_argument("--start", type=float, default=0.0, help="--alarms: scene time (s) to start at (default 0)")
     p.add_argument("--matching", metavar="DIR",
-                   help="instead: point matching (tracker.stereo.match_point) against OpenCV StereoSGBM on the "
+                   help="instead: point matching (tracker.point_match.match_point) against OpenCV StereoSGBM on the "
                         "rectified pairs with known disparity under DIR (NAME/im2.png, im6.png, disp2.png, disp6.png)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
