@@ -8,16 +8,18 @@ temporal model (background B and mean deviation D per pixel, at gain 1; tracker.
 1. Candidates, on the stride grid: |Γ - g B| beyond the local range of g B (its min and max over a 3x3
    cell neighbourhood, so a texture that sways or jitters by a few pixels stays in) by more than
    ε + 3 g D; g is the frame's global gain, the median of Γ / B over the grid (a light step scales Γ, not
-   the model). Groups of cells that the objects the stereo stages found explain are left to them; an
-   object verified here that covers more than they do replaces them (the stereo residual of an object
-   near its background shows only parts of it).
+   the model); rows whose D has not been learnt yet raise nothing. Groups of cells touching objects the
+   stereo stages found stand clear of their background are left to them; an object verified here that
+   is larger than those near their background it touches replaces them (the stereo residual of an
+   object near its background shows only parts of it).
 2. Verification of each group at full resolution: the outline from the temporal model at the ring gain
    (tracker.verify.temporal_outline); a region whose texture is the background's own relit (zero-mean
    normalised correlation of Γ with B over it above `max_texture_corr`: a shadow, a local change of
    light) is dropped; the range comes from matching the region itself between the two cameras
    (tracker.stereo through the verifier's strips) and must not lie behind the known background by more
    than `behind_tolerance_px` (a background uncovered where the learnt geometry held an object lies
-   behind it).
+   behind it); of a region that also holds something at another depth, the part that is one surface at
+   the matched disparity is kept (and matched again).
 """
 
 from __future__ import annotations
@@ -30,7 +32,16 @@ from numpy.typing import NDArray
 
 from tracker.detect import Box, StereoSubtractor
 from tracker.frames import StereoFrame
-from tracker.verify import Blob, Verifier, background_disparity, mask_centroid, nearest_hint, temporal_outline
+from tracker.rectify import Rectifier
+from tracker.verify import (
+    Blob,
+    Verifier,
+    background_disparity,
+    largest_region,
+    mask_centroid,
+    nearest_hint,
+    temporal_outline,
+)
 
 F32 = NDArray[np.float32]
 F64 = NDArray[np.float64]
@@ -44,14 +55,12 @@ class TemporalConfig:
     region above which it is the background relit; behind_tolerance_px: how far behind the background
     (disparity, px; the background's is the median over the region) a region may match; learnt_updates:
     updates of the background's deviation D a row needs before it raises candidates (each row is updated
-    every 24 frames); explained: the share of a changed region's cells the stereo stages' objects must
-    cover for it to be theirs."""
+    every 24 frames)."""
 
     min_area_px: int = 64
     max_texture_corr: float = 0.6
     behind_tolerance_px: float = 0.15
     learnt_updates: int = 3
-    explained: float = 0.7
 
 
 def global_gain(key: U8, bg: F32) -> float | None:
@@ -83,20 +92,35 @@ def texture_corr(key: U8, bg: F32, mask: NDArray[np.bool_]) -> float:
     return float(a @ b) / den if den > 1e-9 else 1.0
 
 
+_WIN = (5, 5)
+
+
+def _same_surface(rect: Rectifier, frame: StereoFrame, box: Box, obj: NDArray[np.bool_], d: float, eps: int
+                  ) -> NDArray[np.bool_]:
+    """The part of a changed region that is one surface at disparity d: pixels whose 5x5 mean of
+    |Γ(x, y) - Θ(x_r, y_r)| is at most 2ε, (x_r, y_r) the raw right pixel of the rectified left point
+    shifted by d; its largest component, grown back by two pixels inside the region. What the region
+    also holds at another depth (a background uncovered next to the object) drops out."""
+    x0, y0, x1, y1 = box
+    rc = rect.rect_of_raw[0][y0:y1, x0:x1]
+    qx, qy = rc[..., 0] - np.float32(d), np.ascontiguousarray(rc[..., 1])
+    ur = cv2.remap(rect.maps[1][0], qx, qy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    vr = cv2.remap(rect.maps[1][1], qx, qy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    theta = cv2.remap(frame.right, ur, vr, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    diff = cv2.blur(cv2.absdiff(frame.left[y0:y1, x0:x1], theta).astype(np.float32), _WIN)
+    same = largest_region(obj & (diff <= 2 * eps))
+    return np.asarray(cv2.dilate(same.view(np.uint8), _NB, iterations=2) > 0) & obj
+
+
 def _overlap(a: Box, b: Box) -> bool:
     return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
 
 
-def low_mask(blobs: list[Blob], s: int, shape: tuple[int, ...]) -> U8:
-    """The blobs' masks sampled on the stride-s grid (0/255), shape `shape`."""
-    low = np.zeros(shape[:2], np.uint8)
-    for b in blobs:
-        x0, y0, _, _ = b.box
-        sub = b.mask[(-y0) % s::s, (-x0) % s::s]
-        ly, lx = (y0 + s - 1) // s, (x0 + s - 1) // s
-        part = low[ly:ly + sub.shape[0], lx:lx + sub.shape[1]]
-        part |= sub[:part.shape[0], :part.shape[1]].astype(np.uint8) * np.uint8(255)
-    return low
+def _without_rims(blobs: list[Blob]) -> list[Blob]:
+    """The blobs less those under a tenth of the area of a blob whose box overlaps theirs: the rim left
+    around an object (the verifier's rule for a second object in one box, applied to the outlines)."""
+    return [b for b in blobs if not any(o is not b and _overlap(o.box, b.box) and b.area < o.area // 10
+                                        for o in blobs)]
 
 
 class TemporalDetector:
@@ -109,9 +133,9 @@ class TemporalDetector:
         self.gain: float | None = None
 
     def detect(self, frame: StereoFrame, found: list[Blob], hints: F64 | None) -> list[Blob]:
-        """All the frame's objects: those the stereo stages `found`, with each replaced by the temporal
-        model's object where that covers a changed region they explain less than `explained` of, and the
-        changed regions they do not touch verified as new objects."""
+        """All the frame's objects: those the stereo stages `found`, those of them near their background
+        replaced by the temporal model's object over the changed region they lie in when that is larger,
+        and the changed regions they do not touch verified as new objects."""
         self.gain = None
         model = self.sub.left_background(frame.gimbal)
         if model is None:
@@ -127,24 +151,25 @@ class TemporalDetector:
         learnt = self.sub.learnt_rows(frame.gimbal, self.cfg.learnt_updates)
         if learnt is not None:
             fg[~learnt[::s]] = 0  # no deviation known there yet
-        own = low_mask(found, s, fg.shape)
         out = list(found)
-        for box, cells in self._groups(fg):
-            x0, y0, x1, y1 = box
-            mine = own[y0 // s:(y1 + s - 1) // s, x0 // s:(x1 + s - 1) // s]
+        for box in self._groups(fg):
             covered = [b for b in out if _overlap(b.box, box)]
-            share = cv2.countNonZero(cv2.bitwise_and(mine, cells)) / cv2.countNonZero(cells)
-            if covered and share >= self.cfg.explained:
-                continue  # the stereo stages' objects explain this change
+            if covered and not all(self._near_background(b) for b in covered):
+                continue  # objects well clear of their background: their stereo outline holds
             blob = self.verify(frame, box, bg, dev, g, hints)
-            if blob is None or (covered and blob.area < 1.2 * sum(b.area for b in covered)):
+            if blob is None or (covered and blob.area <= sum(b.area for b in covered)):
                 continue
             out = [b for b in out if all(b is not c for c in covered)] + [blob]
-        return out
+        return _without_rims(out)
 
-    def _groups(self, fg: U8) -> list[tuple[Box, U8]]:
-        """Boxes (raw pixels, with the detector's margin) around groups of changed cells large enough, and
-        each group's cells over its box's cells (0/255)."""
+    def _near_background(self, b: Blob) -> bool:
+        """Whether a stereo object is within twice the depth-gap test of its background: its residual then
+        shows only parts of it, and the temporal model's outline may hold more."""
+        cfg = self.sub.cfg
+        return b.disparity < b.bg_disparity * (1.0 + 2.0 * cfg.min_depth_gap) + 2.0 * cfg.min_disparity_gap_px
+
+    def _groups(self, fg: U8) -> list[Box]:
+        """Boxes (raw pixels, with the detector's margin) around groups of changed cells large enough."""
         if cv2.countNonZero(fg) == 0:
             return []
         s, m = self.sub.cfg.stride, self.sub.cfg.margin_px
@@ -154,15 +179,9 @@ class TemporalDetector:
         out = []
         for i in range(1, n):
             x, y, bw, bh, _area = (int(v) for v in stats[i])
-            cells = np.where(labels[y:y + bh, x:x + bw] == i, fg[y:y + bh, x:x + bw], 0).astype(np.uint8)
-            if cv2.countNonZero(cells) < min_cells:
+            if cv2.countNonZero((labels[y:y + bh, x:x + bw] == i).view(np.uint8) & fg[y:y + bh, x:x + bw]) < min_cells:
                 continue
-            box = (max(x * s - m, 0), max(y * s - m, 0), min((x + bw) * s + m, w), min((y + bh) * s + m, h))
-            # the cells over the box's whole grid, so that they line up with the box's low-resolution crop
-            full = np.zeros(((box[3] + s - 1) // s - box[1] // s, (box[2] + s - 1) // s - box[0] // s), np.uint8)
-            oy, ox = y - box[1] // s, x - box[0] // s
-            full[oy:oy + bh, ox:ox + bw] = cells
-            out.append((box, full))
+            out.append((max(x * s - m, 0), max(y * s - m, 0), min((x + bw) * s + m, w), min((y + bh) * s + m, h)))
         return out
 
     def verify(self, frame: StereoFrame, box: Box, bg: F32, dev: F32, g: float, hints: F64 | None
@@ -181,6 +200,14 @@ class TemporalDetector:
         fine = self.verifier.match_object(frame, box, obj, nearest_hint(hints, obj, box))
         if fine is None:
             return None
+        same = _same_surface(self.verifier.rect, frame, box, obj, fine.disparity, eps)
+        if int(np.count_nonzero(same)) < cfg.min_area_px:
+            return None
+        if int(np.count_nonzero(same)) < 0.9 * int(np.count_nonzero(obj)):  # part of it was something else
+            obj = same
+            fine = self.verifier.match_object(frame, box, obj, fine.disparity)
+            if fine is None:
+                return None
         m8 = obj.view(np.uint8)
         area, c_box = mask_centroid(m8)
         c_raw = c_box + (x0, y0)  # eq. (10)

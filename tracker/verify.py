@@ -72,6 +72,11 @@ def _largest(mask: BoolA, close: bool = False, every: bool = False) -> BoolA:
     return out.astype(bool)
 
 
+def largest_region(mask: BoolA) -> BoolA:
+    """The largest 8-connected component of a mask, holes filled."""
+    return _largest(mask)
+
+
 _CORE = np.ones((3, 3), np.uint8)
 _MATCH_HALF = (24, 16)  # half width and height (px) of the largest window matched
 # weighted ZNCC a region's match needs: a whole object scores 0.95-0.99; a sliver beside an occluder that
