@@ -178,7 +178,7 @@ class BackgroundDepth:
             swapped = match_support(rect.rectify(frame.right, 0), rect.rectify(frame.left, 1), self.num_disparities)
             check_disparity_sign(match_support(lr, rr, self.num_disparities), swapped, lr.size // 400)
             self._sign_checked = True
-        pu, pv, inv = self._match_points(frame, max_disparity or self.num_disparities, None)
+        pu, pv, inv = self._match_points(frame, max_disparity or self.num_disparities)
         self.canvas[pv, pu] = inv
         self._fill_holes()
         for key in (0, 1):
@@ -193,20 +193,20 @@ class BackgroundDepth:
         self._check(frame)
         x0, y0, x1, y1 = box
         rc = self.rect.rect_of_raw[0][y0:y1, x0:x1]
-        h = frame.left.shape[0]
+        h, w = frame.left.shape
         rows = (max(int(np.floor(rc[..., 1].min())) - 4, 0), min(int(np.ceil(rc[..., 1].max())) + 5, h))
+        cols = (max(int(np.floor(rc[..., 0].min())) - 8, 0), min(int(np.ceil(rc[..., 0].max())) + 9, w))
         cu, cv = self._canvas_coords(self._grid(0, 1).crop(box).rays, frame.gimbal)
         H, W = self.canvas.shape
         u0, v0 = max(int(np.floor(cu.min())), 0), max(int(np.floor(cv.min())), 0)
         u1, v1 = min(int(np.ceil(cu.max())) + 1, W), min(int(np.ceil(cv.max())) + 1, H)
-        pu, pv, inv = self._match_points(frame, self.num_disparities, rows)
+        pu, pv, inv = self._match_points(frame, self.num_disparities, rows, cols)
         inside = (pu >= u0) & (pu < u1) & (pv >= v0) & (pv < v1)
         self.canvas[v0:v1, u0:u1] = 0.0
         self.canvas[pv[inside], pu[inside]] = inv[inside]
         m = 8  # fill the holes from the known directions around the box
         crop = (max(u0 - m, 0), max(v0 - m, 0), min(u1 + m, W), min(v1 + m, H))
         self.canvas[crop[1]:crop[3], crop[0]:crop[2]] = _filled(self.canvas[crop[1]:crop[3], crop[0]:crop[2]])
-        w = frame.left.shape[1]
         for key, kbox in ((0, box), (1, (max(x0 - self.num_disparities, 0), y0, min(x1 + 8, w), y1))):
             self.floors[key][v0:v1, u0:u1] = 0
             self._learn_floor(frame, key, kbox)
@@ -218,14 +218,21 @@ class BackgroundDepth:
             raise FrameError(f"background frame size {frame.left.shape[::-1]} does not match the rig's "
                              f"{self.rect.rig.left.size}")
 
-    def _match_points(self, frame: StereoFrame, nd: int, rows: tuple[int, int] | None
-                      ) -> tuple[NDArray[np.intp], NDArray[np.intp], F32]:
+    def _match_points(self, frame: StereoFrame, nd: int, rows: tuple[int, int] | None = None,
+                      cols: tuple[int, int] | None = None) -> tuple[NDArray[np.intp], NDArray[np.intp], F32]:
         """Background points of a pair by semi-global matching on its rectified images (or on their rows
-        rows[0]:rows[1]): canvas pixels (u, v) and 1/ρ (1/m) of each, far first (so that nearer surfaces
-        win where both land on one canvas pixel)."""
+        rows[0]:rows[1], for left columns cols[0]:cols[1]): canvas pixels (u, v) and 1/ρ (1/m) of each, far
+        first (so that nearer surfaces win where both land on one canvas pixel)."""
         rect = self.rect
         lr, rr = rect.rectify(frame.left, 0), rect.rectify(frame.right, 1)
         r0, r1 = rows or (0, lr.shape[0])
+        c0, c1 = cols or (0, lr.shape[1])
+        if cols is not None:  # the right image's columns the search reaches, and the left's kept
+            s0 = max(c0 - nd, 0)
+            lr, rr = lr[:, s0:c1], rr[:, s0:c1]
+            c0, c1 = c0 - s0, c1 - s0
+        else:
+            s0 = 0
         sgbm = cv2.StereoSGBM.create(minDisparity=0, numDisparities=nd, blockSize=5, P1=8 * 25, P2=32 * 25,
                                      disp12MaxDiff=1, uniquenessRatio=5, speckleWindowSize=100,
                                      speckleRange=2, mode=cv2.STEREO_SGBM_MODE_HH)
@@ -233,10 +240,10 @@ class BackgroundDepth:
         def pad(img: U8) -> U8:
             return np.asarray(cv2.copyMakeBorder(img[r0:r1], 0, 0, nd, 0, cv2.BORDER_REPLICATE), np.uint8)
 
-        disp = np.asarray(sgbm.compute(pad(lr), pad(rr)))[:, nd:].astype(np.float32) / 16.0
+        disp = np.asarray(sgbm.compute(pad(lr), pad(rr)))[:, nd + c0:nd + c1].astype(np.float32) / 16.0
         ys, xs = np.nonzero(disp > 0.5)
         d = disp[ys, xs].astype(np.float64)
-        X_rig = self._rect_points_to_rig(xs.astype(np.float64), (ys + r0).astype(np.float64), d)
+        X_rig = self._rect_points_to_rig((xs + s0 + c0).astype(np.float64), (ys + r0).astype(np.float64), d)
         g = frame.gimbal or GimbalState()
         X_w = X_rig @ gimbal_rotation(g.pan_deg, g.tilt_deg).T
         rho = np.linalg.norm(X_w, axis=1)
