@@ -171,50 +171,100 @@ class BackgroundDepth:
         """Add an empty-scene pair to the panorama by semi-global matching on the rectified pair.
         Returns the number of background points learnt. Raises FrameError for a pair that is not grey
         uint8 of the rig's size."""
-        rect = self.rect
-        check_pair(frame.left, frame.right)
-        if frame.left.shape[::-1] != rect.rig.left.size:
-            raise FrameError(f"background frame size {frame.left.shape[::-1]} does not match the rig's "
-                             f"{rect.rig.left.size}")
-        lr, rr = rect.rectify(frame.left, 0), rect.rectify(frame.right, 1)
+        self._check(frame)
         if not self._sign_checked:  # the first pair: would the background match better exchanged?
+            rect = self.rect
+            lr, rr = rect.rectify(frame.left, 0), rect.rectify(frame.right, 1)
             swapped = match_support(rect.rectify(frame.right, 0), rect.rectify(frame.left, 1), self.num_disparities)
             check_disparity_sign(match_support(lr, rr, self.num_disparities), swapped, lr.size // 400)
             self._sign_checked = True
-        nd = max_disparity or self.num_disparities
+        pu, pv, inv = self._match_points(frame, max_disparity or self.num_disparities)
+        self.canvas[pv, pu] = inv
+        self._fill_holes()
+        for key in (0, 1):
+            self._learn_floor(frame, key)
+        return int(pu.size)
+
+    def relearn(self, frame: StereoFrame, box: tuple[int, int, int, int]) -> int:
+        """Learn the background again where the left pixels of box = (x0, y0, x1, y1) see it, from a pair
+        at the same pose as before (what stood there has gone): the panorama and the floors inside the
+        box's directions are replaced, the rest kept. Semi-global matching runs on the box's rectified
+        rows only. Returns the number of background points learnt."""
+        self._check(frame)
+        x0, y0, x1, y1 = box
+        rc = self.rect.rect_of_raw[0][y0:y1, x0:x1]
+        h, w = frame.left.shape
+        rows = (max(int(np.floor(rc[..., 1].min())) - 4, 0), min(int(np.ceil(rc[..., 1].max())) + 5, h))
+        cols = (max(int(np.floor(rc[..., 0].min())) - 8, 0), min(int(np.ceil(rc[..., 0].max())) + 9, w))
+        cu, cv = self._canvas_coords(self._grid(0, 1).crop(box).rays, frame.gimbal)
+        H, W = self.canvas.shape
+        u0, v0 = max(int(np.floor(cu.min())), 0), max(int(np.floor(cv.min())), 0)
+        u1, v1 = min(int(np.ceil(cu.max())) + 1, W), min(int(np.ceil(cv.max())) + 1, H)
+        pu, pv, inv = self._match_points(frame, self.num_disparities, rows, cols)
+        inside = (pu >= u0) & (pu < u1) & (pv >= v0) & (pv < v1)
+        self.canvas[v0:v1, u0:u1] = 0.0
+        self.canvas[pv[inside], pu[inside]] = inv[inside]
+        m = 8  # fill the holes from the known directions around the box
+        crop = (max(u0 - m, 0), max(v0 - m, 0), min(u1 + m, W), min(v1 + m, H))
+        self.canvas[crop[1]:crop[3], crop[0]:crop[2]] = _filled(self.canvas[crop[1]:crop[3], crop[0]:crop[2]])
+        for key, kbox in ((0, box), (1, (max(x0 - self.num_disparities, 0), y0, min(x1 + 8, w), y1))):
+            self.floors[key][v0:v1, u0:u1] = 0
+            self._learn_floor(frame, key, kbox)
+        return int(np.count_nonzero(inside))
+
+    def _check(self, frame: StereoFrame) -> None:
+        check_pair(frame.left, frame.right)
+        if frame.left.shape[::-1] != self.rect.rig.left.size:
+            raise FrameError(f"background frame size {frame.left.shape[::-1]} does not match the rig's "
+                             f"{self.rect.rig.left.size}")
+
+    def _match_points(self, frame: StereoFrame, nd: int, rows: tuple[int, int] | None = None,
+                      cols: tuple[int, int] | None = None) -> tuple[NDArray[np.intp], NDArray[np.intp], F32]:
+        """Background points of a pair by semi-global matching on its rectified images (or on their rows
+        rows[0]:rows[1], for left columns cols[0]:cols[1]): canvas pixels (u, v) and 1/ρ (1/m) of each, far
+        first (so that nearer surfaces win where both land on one canvas pixel)."""
+        rect = self.rect
+        lr, rr = rect.rectify(frame.left, 0), rect.rectify(frame.right, 1)
+        r0, r1 = rows or (0, lr.shape[0])
+        c0, c1 = cols or (0, lr.shape[1])
+        if cols is not None:  # the right image's columns the search reaches, and the left's kept
+            s0 = max(c0 - nd, 0)
+            lr, rr = lr[:, s0:c1], rr[:, s0:c1]
+            c0, c1 = c0 - s0, c1 - s0
+        else:
+            s0 = 0
         sgbm = cv2.StereoSGBM.create(minDisparity=0, numDisparities=nd, blockSize=5, P1=8 * 25, P2=32 * 25,
                                      disp12MaxDiff=1, uniquenessRatio=5, speckleWindowSize=100,
                                      speckleRange=2, mode=cv2.STEREO_SGBM_MODE_HH)
         # pad on the left so that the first `nd` columns get a disparity search too
         def pad(img: U8) -> U8:
-            return np.asarray(cv2.copyMakeBorder(img, 0, 0, nd, 0, cv2.BORDER_REPLICATE), np.uint8)
+            return np.asarray(cv2.copyMakeBorder(img[r0:r1], 0, 0, nd, 0, cv2.BORDER_REPLICATE), np.uint8)
 
-        disp = np.asarray(sgbm.compute(pad(lr), pad(rr)))[:, nd:].astype(np.float32) / 16.0
+        disp = np.asarray(sgbm.compute(pad(lr), pad(rr)))[:, nd + c0:nd + c1].astype(np.float32) / 16.0
         ys, xs = np.nonzero(disp > 0.5)
         d = disp[ys, xs].astype(np.float64)
-        X_rig = self._rect_points_to_rig(xs.astype(np.float64), ys.astype(np.float64), d)
+        X_rig = self._rect_points_to_rig((xs + s0 + c0).astype(np.float64), (ys + r0).astype(np.float64), d)
         g = frame.gimbal or GimbalState()
         X_w = X_rig @ gimbal_rotation(g.pan_deg, g.tilt_deg).T
         rho = np.linalg.norm(X_w, axis=1)
         cu, cv = self._to_canvas(X_w)
         pu, pv = np.round(cu).astype(int), np.round(cv).astype(int)
         ok = (X_w[:, 2] > 0) & (pu >= 0) & (pv >= 0) & (pu < self.canvas.shape[1]) & (pv < self.canvas.shape[0])
-        order = np.argsort(-rho[ok])  # far first, so nearer surfaces win where both land
-        self.canvas[pv[ok][order], pu[ok][order]] = (1.0 / rho[ok][order]).astype(np.float32)
-        self._fill_holes()
-        for key in (0, 1):
-            self._learn_floor(frame, key)
-        return int(ok.sum())
+        order = np.argsort(-rho[ok])
+        return pu[ok][order], pv[ok][order], (1.0 / rho[ok][order]).astype(np.float32)
 
-    def _learn_floor(self, frame: StereoFrame, key: int) -> None:
+    def _learn_floor(self, frame: StereoFrame, key: int, box: tuple[int, int, int, int] | None = None) -> None:
         """Store the empty scene's residual of eq. (9), less the noise level and dilated by a pixel, in
-        the floor canvas of camera `key` (the largest seen per direction)."""
-        cm = self.correspondence(key, frame.gimbal, with_floor=False)
+        the floor canvas of camera `key` (the largest seen per direction), for the key pixels in `box`
+        (x0, y0, x1, y1) or all of them."""
+        cm = self.correspondence(key, frame.gimbal, with_floor=False, box=box)
         img_k, img_o = (frame.left, frame.right) if key == 0 else (frame.right, frame.left)
+        x0, y0, x1, y1 = box or (0, 0, img_k.shape[1], img_k.shape[0])
         ref = cv2.remap(img_o, cm.map_x, cm.map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-        resid = np.asarray(cv2.absdiff(img_k, ref), np.uint8)
+        resid = np.asarray(cv2.absdiff(np.ascontiguousarray(img_k[y0:y1, x0:x1]), ref), np.uint8)
         resid = np.asarray(cv2.subtract(resid, np.full_like(resid, 3)), np.uint8)
-        pu, pv = self._canvas_coords(self._grid(key, 1).rays, frame.gimbal)
+        grid = self._grid(key, 1)
+        pu, pv = self._canvas_coords(grid.crop(box).rays if box else grid.rays, frame.gimbal)
         iu, iv = np.round(pu).astype(int).ravel(), np.round(pv).astype(int).ravel()
         vals = resid.ravel()
         ok = (iu >= 0) & (iv >= 0) & (iu < self.canvas.shape[1]) & (iv < self.canvas.shape[0])
@@ -231,19 +281,10 @@ class BackgroundDepth:
         L = r.rig.left
         return np.asarray(X @ r.R1 @ L.R_rc + L.c)
 
-    def _fill_holes(self, iterations: int = 200) -> None:
+    def _fill_holes(self) -> None:
         """Fill unknown pixels inside the learnt area with their farthest known neighbour (occlusion
         holes belong to the background behind), by repeated grey-level erosion of 1/ρ."""
-        known = self.canvas > 0
-        inv = np.where(known, self.canvas, np.float32(1e6)).astype(np.float32)
-        kernel = np.ones((3, 3), np.uint8)
-        for _ in range(iterations):
-            unknown = inv >= 1e6
-            if not unknown.any():
-                break
-            grown = cv2.erode(inv, kernel)
-            inv = np.where(unknown, grown, inv)
-        self.canvas = np.where(inv >= 1e6, 0.0, inv).astype(np.float32)
+        self.canvas = _filled(self.canvas)
 
     # -- lookup -----------------------------------------------------------------------------------
     def _grid(self, key: int, step: int) -> _RayGrid:
@@ -305,3 +346,18 @@ class BackgroundDepth:
         disp = np.divide(np.float32(self.rect.f * self.rect.b), np.maximum(z_rect, np.float32(1e-3), out=z_rect),
                          out=z_rect)
         return CorrespondenceMap(mx, my, valid, disp, floor)
+
+
+def _filled(canvas: F32, iterations: int = 200) -> F32:
+    """`canvas` (1/ρ, 0 = unknown) with each unknown pixel within `iterations` pixels of known ones set to
+    its farthest known neighbour's value (grey-level erosion of 1/ρ, repeated)."""
+    known = canvas > 0
+    inv = np.where(known, canvas, np.float32(1e6)).astype(np.float32)
+    kernel = np.ones((3, 3), np.uint8)
+    for _ in range(iterations):
+        unknown = inv >= 1e6
+        if not unknown.any():
+            break
+        grown = cv2.erode(inv, kernel)
+        inv = np.where(unknown, grown, inv)
+    return np.where(inv >= 1e6, 0.0, inv).astype(np.float32)

@@ -148,6 +148,8 @@ class StereoSubtractor:
         # temporal model per pose: background B and mean absolute deviation D, at gain 1
         self.left_bg: dict[tuple[float, float], tuple[NDArray[np.float32], NDArray[np.float32]]] = {}
         self._stripe = 0
+        # per pose: rows of the left image whose deviation D has been learnt (updated often enough)
+        self.left_learnt: dict[tuple[float, float], NDArray[np.int32]] = {}
 
     def reconfigure(self, config: DetectorConfig) -> None:
         """Use new settings from the next frame on; the stride (the shape of the candidate grid) is fixed."""
@@ -172,6 +174,10 @@ class StereoSubtractor:
         """Forget cached correspondence maps (after the background geometry changed)."""
         self._maps = None
 
+    def restart_floor(self) -> None:
+        """Take the residual floor from the learnt background again at the next frame (after a relearn)."""
+        self._frame_pose = None
+
     def correspondence(self, key: int, gimbal: GimbalState | None, box: Box) -> CorrespondenceMap:
         """Full-resolution correspondence for the pixels in `box` of camera `key`. While the pose stays,
         the map is kept and filled in tiles as boxes need them; while it moves, only the box is mapped."""
@@ -189,7 +195,12 @@ class StereoSubtractor:
         and maps the correspondences at whatever pose that frame has (not at every survey pose)."""
         pose = self._pose(frame.gimbal)
         self.left_bg[pose] = (frame.left.astype(np.float32), np.zeros(frame.left.shape, np.float32))
+        self.left_learnt[pose] = np.zeros(frame.left.shape[0], np.int32)
         self._frame_pose = None
+
+    def pose_of(self, gimbal: GimbalState | None) -> tuple[float, float]:
+        """The key of a gimbal pose in the per-pose models: (pan, tilt) in degrees, rounded to 1e-4."""
+        return self._pose(gimbal)
 
     @staticmethod
     def _pose(gimbal: GimbalState | None) -> tuple[float, float]:
@@ -201,6 +212,12 @@ class StereoSubtractor:
         """The left camera's temporal model at this pose: background B and its mean absolute deviation D
         (grey levels at gain 1; (H, W) float32 each). None while the cameras move."""
         return None if self.moving else self.left_bg.get(self._pose(gimbal))
+
+    def learnt_rows(self, gimbal: GimbalState | None, updates: int) -> NDArray[np.bool_] | None:
+        """Rows (H,) of the left temporal model at this pose whose D has had `updates` updates or more
+        (a model primed from one pair knows no deviation yet: swaying foliage would look like change)."""
+        n = self.left_learnt.get(self._pose(gimbal))
+        return None if n is None else np.asarray(n >= updates)
 
     def update_left_background(self, frame: StereoFrame, objects: list[tuple[Box, NDArray[np.bool_]]],
                                gain: float, stripes: int = 24, alpha: float = 0.3) -> None:
@@ -214,6 +231,7 @@ class StereoSubtractor:
         k = self._stripe % stripes
         self._stripe += 1
         y0, y1 = k * h // stripes, (k + 1) * h // stripes
+        self.left_learnt[self._pose(frame.gimbal)][y0:y1] += 1
         cur = frame.left[y0:y1].astype(np.float32) * np.float32(1.0 / max(gain, 1e-3))
         keep = paint_masks(objects, y0, (y1 - y0, bg.shape[1])) if objects else None
         a = np.float32(alpha)

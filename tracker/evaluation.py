@@ -134,11 +134,13 @@ def score_frame(acc: _Acc, res: FrameResult, truth: FrameTruth, pipe: Pipeline, 
     acc.el.append(float(np.degrees(loc.phi - ph_t)))
 
 
-def run_scenario(name: str, frames: int | None = None, seed: int = 0, rig: StereoRig | None = None,
+def run_scenario(name: str | Scenario, frames: int | None = None, seed: int = 0, rig: StereoRig | None = None,
                  detector: DetectorConfig | None = None, progress: Progress | None = None) -> EvalReport:
-    """Run the pipeline on a scenario and score it. `rig`: the calibration the pipeline uses (default:
-    the simulator's true rig); the simulator always renders through its true rig."""
-    scenario = get_scenario(name)
+    """Run the pipeline on a scenario (a name, or a Scenario not in the list) and score it. `rig`: the
+    calibration the pipeline uses (default: the simulator's true rig); the simulator always renders
+    through its true rig."""
+    scenario = get_scenario(name) if isinstance(name, str) else name
+    name = scenario.name
     if scenario.closed_loop:
         raise ValueError(f"scenario {name!r} is closed-loop: run it with the servo evaluation")
     sim = SimRig(scenario, seed=seed)

@@ -15,12 +15,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tracker.bgdepth import BackgroundDepth
+from tracker.bglearn import LearntBackground, Sighting, StreamLearnConfig, StreamLearner, changed_box
 from tracker.budget import BudgetConfig, VerifyBudget
 from tracker.detect import DetectorConfig, StereoSubtractor, paint_masks
 from tracker.frames import StereoFrame
 from tracker.geometry import StereoRig
 from tracker.localize import Localization, Localizer
 from tracker.rectify import Rectifier
+from tracker.temporal import TemporalConfig, TemporalDetector
 from tracker.tracks import MultiTracker, TrackerConfig
 from tracker.verify import Blob, Verifier
 
@@ -60,16 +62,18 @@ class Pipeline:
 
     def __init__(self, rig: StereoRig, detector: DetectorConfig | None = None,
                  tracker: TrackerConfig | None = None, origin: F64 | None = None,
-                 budget: BudgetConfig | None = None):
+                 budget: BudgetConfig | None = None, temporal: TemporalConfig | None = None):
         self.rig = rig
         self.rect = Rectifier(rig)
         self.bg = BackgroundDepth(self.rect, near_m=(detector or DetectorConfig()).near_m)
         self.subtractor = StereoSubtractor(self.bg, detector)
         self.verifier = Verifier(self.subtractor, self.rect)
         self.budget = VerifyBudget(self.subtractor.low_shape, self.subtractor.cfg.stride, budget)
+        self.temporal = TemporalDetector(self.subtractor, self.verifier, temporal)
         self.localizer = Localizer(self.rect, origin)
         self.tracker = MultiTracker(tracker)
         self._last_gain = 1.0
+        self.learner: StreamLearner | None = None
 
     def learn_background(self, frame: StereoFrame) -> int:
         """Learn the background's geometry from an empty-scene pair (any gimbal pose)."""
@@ -77,6 +81,32 @@ class Pipeline:
         self.subtractor.reset_maps()
         self.subtractor.prime(frame)
         return n
+
+    def learn_background_from_stream(self, first: StereoFrame, config: StreamLearnConfig | None = None) -> int:
+        """Start from the first pair as the background, then learn it again from the stream's robust
+        statistics while the cameras stay at its pose (tracker.bglearn): objects in view at start-up
+        need not leave first. Returns the number of background points learnt from `first`."""
+        n = self.learn_background(first)
+        self.learner = StreamLearner(first, config)
+        return n
+
+    def _relearn(self, frame: StereoFrame, learnt: LearntBackground) -> None:
+        """Take a background pair learnt from the stream: the temporal model becomes its left image and
+        deviation; where it differs from the pair the geometry came from (an object stood there), the
+        geometry and floors are learnt again inside the bounding box of those pixels."""
+        assert self.learner is not None
+        pose = self.subtractor.pose_of(frame.gimbal)
+        self.subtractor.left_bg[pose] = (learnt.left.astype(np.float32), learnt.left_dev)
+        self.subtractor.left_learnt[pose][:] = learnt.samples  # D comes from the samples
+        box = changed_box(self.learner.reference_left, learnt.left, self.subtractor.cfg.epsilon,
+                          self.subtractor.cfg.min_area_px)
+        self.learner.reference(learnt.left, learnt.right)
+        if box is None:
+            return
+        pair = StereoFrame(frame.index, learnt.left, learnt.right, frame.t_left, frame.t_right, frame.gimbal)
+        self.bg.relearn(pair, box)
+        self.subtractor.reset_maps()
+        self.subtractor.restart_floor()
 
     def step(self, frame: StereoFrame) -> FrameResult:
         ms: dict[str, float] = {}
@@ -87,6 +117,7 @@ class Pipeline:
         boxes = cands.worth_verifying(self.subtractor.cfg.moving_min_cells, hints)
         boxes = self.budget.select(boxes, dict(zip(cands.boxes, cands.cells, strict=True)), hints)
         blobs = [b for box in boxes for b in self.verifier.verify_all(frame, box, hints)]
+        blobs = self.temporal.detect(frame, blobs, hints)  # cameras still: objects too near their background
         t2 = time.perf_counter()
         locs = [self.localizer.locate(b.centroid_rect, b.disparity, b.disparity_sigma, b.area, frame.gimbal)
                 for b in blobs]
@@ -94,9 +125,14 @@ class Pipeline:
         obs = np.array([[b.centroid_raw[0], b.centroid_raw[1], b.disparity] for b in blobs]).reshape(-1, 3)
         ids = self.tracker.update(frame.t, obs)
         self.subtractor.update_floor(self._foreground_low(blobs))
-        gain = max(blobs, key=lambda b: b.area).gain if blobs else self._last_gain
+        gain = self.temporal.gain or (max(blobs, key=lambda b: b.area).gain if blobs else self._last_gain)
         self._last_gain = gain
         self.subtractor.update_left_background(frame, [(b.box, b.mask) for b in blobs], gain)
+        if self.learner is not None:
+            seen = [Sighting(b.box, b.mask, b.disparity) for b in blobs]
+            learnt = self.learner.observe(frame, gain, not cands.moving, seen)
+            if learnt is not None:
+                self._relearn(frame, learnt)
         t4 = time.perf_counter()
         for name, a, b in zip(STAGES, (t0, t1, t2, t3), (t1, t2, t3, t4), strict=True):
             ms[name] = (b - a) * 1e3

@@ -72,6 +72,11 @@ def _largest(mask: BoolA, close: bool = False, every: bool = False) -> BoolA:
     return out.astype(bool)
 
 
+def largest_region(mask: BoolA) -> BoolA:
+    """The largest 8-connected component of a mask, holes filled."""
+    return _largest(mask)
+
+
 _CORE = np.ones((3, 3), np.uint8)
 _MATCH_HALF = (24, 16)  # half width and height (px) of the largest window matched
 # weighted ZNCC a region's match needs: a whole object scores 0.95-0.99; a sliver beside an occluder that
@@ -81,7 +86,7 @@ _RING = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (9, 9))
 _NEAR = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
 
 
-def _temporal_outline(key: U8, bg: NDArray[np.float32], dev: NDArray[np.float32], core: BoolA,
+def temporal_outline(key: U8, bg: NDArray[np.float32], dev: NDArray[np.float32], core: BoolA,
                       region: BoolA, eps: int) -> tuple[BoolA, float, BoolA]:
     """The object's exact outline from the temporal model, inside a stereo region.
 
@@ -131,7 +136,7 @@ def _taken(blob: Blob, changed: BoolA | None) -> BoolA:
     return np.asarray(cv2.dilate(m8 | shadow, _TAKEN) > 0)
 
 
-def _mask_centroid(m8: U8) -> tuple[int, F64]:
+def mask_centroid(m8: U8) -> tuple[int, F64]:
     """Pixel count Σ c(i, j) and centroid (Σ i c / Σ c, Σ j c / Σ c) (2,) of a 0/1 mask (eq. 10), from its
     column and row sums."""
     cols = cv2.reduce(m8, 0, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel()  # Σ_j c(i, j) per column i
@@ -140,7 +145,7 @@ def _mask_centroid(m8: U8) -> tuple[int, F64]:
     return n, np.array([float(cols @ np.arange(cols.size)) / n, float(rows @ np.arange(rows.size)) / n])
 
 
-def _background_disparity(cm: CorrespondenceMap, obj: BoolA, c: F64) -> float:
+def background_disparity(cm: CorrespondenceMap, obj: BoolA, c: F64) -> float:
     """The known background's disparity right behind the object's centre c (box pixels), or at the
     object pixel nearest to it; 0 when the background behind the object is unknown (no gap test then)."""
     iy, ix = int(c[1]), int(c[0])
@@ -153,7 +158,7 @@ def _background_disparity(cm: CorrespondenceMap, obj: BoolA, c: F64) -> float:
     return float(cm.disparity[ys[k], xs[k]])
 
 
-def _nearest_hint(hints: F64 | None, region: BoolA, box: Box) -> float | None:
+def nearest_hint(hints: F64 | None, region: BoolA, box: Box) -> float | None:
     """The disparity of the predicted track nearest to the region's centre, if one lies inside it."""
     if hints is None or len(hints) == 0:
         return None
@@ -198,7 +203,7 @@ class Verifier:
             n_left = int(np.count_nonzero(m_left))
             if n_left < min_area:
                 break
-            hint = _nearest_hint(hints, m_left, box)
+            hint = nearest_hint(hints, m_left, box)
             got = None if self._too_small_to_be_new(n_left, hint) else self._verify_region(frame, box, cm, m_left,
                                                                                           hint, free)
             if got is None:
@@ -233,7 +238,7 @@ class Verifier:
             # a tracked object, cameras still: the temporal model draws the outline inside the left-key
             # region (object and shadow), at the strict threshold (moving background there stays out)
             bg, dev = model
-            obj, gain, changed = _temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1],
+            obj, gain, changed = temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1],
                                                    dev[y0:y1, x0:x1], np.zeros_like(m_left), m_left & free,
                                                    cfg.epsilon)
             d0 = d_hint
@@ -245,22 +250,37 @@ class Verifier:
             obj, either, d0 = stereo
             if model is not None:  # cameras still: the temporal model draws the exact outline
                 bg, dev = model
-                obj, gain, changed = _temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1],
+                obj, gain, changed = temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1],
                                                        dev[y0:y1, x0:x1], obj, either & free, cfg.epsilon)
-        strips = self._strips(frame, box, obj, d0)
-        fine = None if strips is None else strips.match(obj, d0, 4)
-        if fine is None or strips is None or (strips.clipped and fine.disparity > strips.d_hi - 2.0):
-            return None  # no match, or one the image edge may have cut short (the right camera may not see it)
+        fine = self.match_object(frame, box, obj, d0)
+        if fine is None:
+            return None
         m8 = obj.view(np.uint8)
-        area, c_box = _mask_centroid(m8)
+        area, c_box = mask_centroid(m8)
         c_raw = c_box + (x0, y0)  # eq. (10), c(i, j) = the object mask
-        d_bg = _background_disparity(cm, obj, c_raw - (x0, y0))
+        d_bg = background_disparity(cm, obj, c_raw - (x0, y0))
         if fine.disparity < d_bg * (1.0 + cfg.min_depth_gap) + cfg.min_disparity_gap_px:
             return None  # not in front of the background: a misregistered background patch
         # eq. (10) in rectified coordinates, pixels weighted by their area: Σ a x / Σ a, Σ a y / Σ a
         sx, sy, sa, _ = cv2.mean(self.rect.area_moments[y0:y1, x0:x1], mask=m8)
         return Blob(box, obj, area, c_raw, np.array([sx / sa, sy / sa]), fine.disparity, fine.sigma, d_bg,
                     fine.score, gain), changed
+
+    def match_object(self, frame: StereoFrame, box: Box, obj: BoolA, d0: float | None) -> RegionMatch | None:
+        """The object's disparity from matching its own pixels (a search over the whole range first when
+        no prior d0 is known). None without a match, or with one the image edge may have cut short (the
+        right camera may not see it)."""
+        if d0 is None:
+            strips = self._strips(frame, box, obj, None)
+            coarse = None if strips is None else strips.match(obj, None, 0)
+            if coarse is None:
+                return None
+            d0 = coarse.disparity
+        strips = self._strips(frame, box, obj, d0)
+        fine = None if strips is None else strips.match(obj, d0, 4)
+        if fine is None or strips is None or (strips.clipped and fine.disparity > strips.d_hi - 2.0):
+            return None
+        return fine
 
     def _outline_stereo(self, frame: StereoFrame, box: Box, m_left: BoolA,
                         d_hint: float | None) -> tuple[BoolA, BoolA, float] | None:

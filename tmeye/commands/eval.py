@@ -29,6 +29,12 @@ def register(subparsers: Any) -> None:
     p.add_argument("--matching", metavar="DIR",
                    help="instead: point matching (tracker.point_match.match_point) against OpenCV StereoSGBM on the "
                         "rectified pairs with known disparity under DIR (NAME/im2.png, im6.png, disp2.png, disp6.png)")
+    p.add_argument("--near-wall", action="store_true",
+                   help="instead: a person walking 0.05, 0.1, 0.2 and 0.5 m in front of a wall at 7 m, cameras still "
+                        "(and 0.1 m with light steps): detection, false targets, range error per gap, MOG2 beside")
+    p.add_argument("--startup", action="store_true",
+                   help="instead: frames lost when a target stands in view from frame 0 and then walks, with the "
+                        "first pair as the background, with the background learnt from the stream, and surveyed")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
 
@@ -45,6 +51,13 @@ def run(args: argparse.Namespace) -> int:
     names = _scenarios()
     if args.matching:
         emit(_matching(args.matching), args.json)
+        return 0
+    if args.near_wall or args.startup:
+        if args.scenario or args.rig or args.epsilon is not None or args.alarms or (args.near_wall and args.startup):
+            raise UserError("--near-wall and --startup run their own scenes: give only --seed, --frames and --json")
+        if args.frames is not None and args.frames < 1:
+            raise UserError(f"--frames must be at least 1, got {args.frames}")
+        emit(_near_wall(args) if args.near_wall else _startup(args), args.json)
         return 0
     if args.list:
         for name, desc in names.items():
@@ -102,6 +115,18 @@ def _closed_loop(args: argparse.Namespace) -> dict[str, object]:
     report = evaluate_closed_loop(args.scenario, frames=args.frames, seed=args.seed,
                                   progress=Progress(f"eval {args.scenario}"))
     return report.to_json()
+
+
+def _near_wall(args: argparse.Namespace) -> dict[str, object]:
+    from tracker.nearwall_eval import near_wall_table
+
+    return near_wall_table(seed=args.seed, frames=args.frames)
+
+
+def _startup(args: argparse.Namespace) -> dict[str, object]:
+    from tracker.startup_eval import METHODS, run_startup
+
+    return {m: run_startup(m, frames=args.frames, seed=args.seed).to_json() for m in METHODS}
 
 
 def _matching(root: str) -> dict[str, object]:

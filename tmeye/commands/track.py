@@ -23,7 +23,7 @@ def register(subparsers: Any) -> None:
     p.add_argument("--end", type=float, help="with --source recording: the range's end (Unix s)")
     p.add_argument("--background", choices=("scene", "first"), default="scene",
                    help="with --source recording: learn the background from the simulated --scenario (default "
-                        "endless, as `tmeye serve`) or from the first recorded pair (real cameras)")
+                        "endless, as `tmeye serve`) or from the first recorded pair, then the stream (real cameras)")
     p.add_argument("inputs", nargs="*", help="LEFT RIGHT: video files, camera indices/devices or RTSP URLs")
     p.add_argument("--scenario", help="simulated scenario (with --source sim, default walk; with --source "
                                       "recording, default endless)")

@@ -146,7 +146,7 @@ def _compose_real(cfg: RuntimeConfig, tuning: TrackerTuning, rig: StereoRig | No
     try:
         pipe = pipeline(rig, cfg, tuning, fps)
         with rig_errors(cfg):
-            pipe.learn_background(first)  # the first pair is taken as the empty background
+            pipe.learn_background_from_stream(first)  # the first pair, then the stream's robust statistics
     except BaseException:
         src.close()
         if driver is not None:
@@ -191,7 +191,8 @@ def _loop(pipe: Pipeline, controller: AimController, driver: ServoDriver) -> Ser
 def rebuild_pipeline(comp: Composition, rig: StereoRig, tuning: TrackerTuning) -> Composition:
     """A new pipeline (and servo loop, sharing the running controller and driver) for `rig` on the same
     source. For the simulator the background is learnt from a second renderer of the same scene (the
-    running one belongs to the worker); a real source's is learnt by the worker from its next frame."""
+    running one belongs to the worker); a real source's is learnt by the worker from its next frame and the
+    stream after it."""
     pipe = pipeline(rig, comp.config, tuning, comp.fps)
     if comp.sim is not None:
         scenario = comp.sim.scenario

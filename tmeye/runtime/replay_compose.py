@@ -1,8 +1,9 @@
 """Composition of a replay: the recording source (tmeye.runtime.recording) with a pipeline whose background is
 learnt as the live runtime learnt it. A recording of the simulated rig (config.scenario set): the empty
 scene of that scenario rendered at the same survey poses (the mount's range when the recording carries mount
-poses, as with the simulated gimbal live). Otherwise the first recorded pair is taken as the empty background,
-the rule of a real source. No servo: each frame carries its recorded mount pose."""
+poses, as with the simulated gimbal live). Otherwise the first recorded pair starts the background and the
+stream's statistics refine it (tracker.bglearn), the rule of a real source. No servo: each frame carries its
+recorded mount pose."""
 
 from __future__ import annotations
 
@@ -75,5 +76,5 @@ def _first_pair_background(cfg: RuntimeConfig, tuning: TrackerTuning, rig: Stere
         tilt = (min(g.tilt_deg for g in poses), max(g.tilt_deg for g in poses))
         widen_background(pipe, *background_range(pan, tilt, rig.left.size, pipe.rect.f))
     with rig_errors(cfg):
-        pipe.learn_background(first)
+        pipe.learn_background_from_stream(first)
     return Composition(cfg, rig, src, pipe, None, None, None, None, src.fps)

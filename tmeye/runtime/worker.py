@@ -183,11 +183,11 @@ class Runtime:
         return fut
 
     def _install(self, comp: Composition, new: Composition) -> None:
-        """In the worker: a real source's new pipeline learns the background from the latest frame."""
+        """In the worker: a real source's new pipeline learns the background from the latest frame, then the stream."""
         if comp.sim is None:
             if self.latest is None:
                 raise RuntimeError("no frame yet to learn the background from")
-            new.pipeline.learn_background(self.latest.frame)
+            new.pipeline.learn_background_from_stream(self.latest.frame)
         comp.rig, comp.pipeline, comp.loop = new.rig, new.pipeline, new.loop
         self.generation += 1
         if self.servo is not None and comp.controller is not None:

@@ -15,7 +15,16 @@ from tracker.geometry import StereoRig, gimbal_rotation
 from tracker.sim.endless import EndlessScene
 from tracker.sim.render import FrameTruth, SimRenderer, TargetTruth
 from tracker.sim.rig import default_rig
-from tracker.sim.scene import MovingObject, Surface, backdrop, foliage, plate_texture
+from tracker.sim.scene import (
+    CAMERA_HEIGHT_M,
+    MovingObject,
+    Surface,
+    backdrop,
+    foliage,
+    person_texture,
+    plate_texture,
+    smooth_texture,
+)
 
 F64 = NDArray[np.float64]
 TWO_PI = 2.0 * np.pi
@@ -103,6 +112,9 @@ class Scenario:
     closed_loop: bool = False
     tags: tuple[str, ...] = field(default_factory=tuple)
     script: Callable[[int], EndlessScene] | None = None
+    wall_m: float | None = None  # a textured wall across the view at this range (m) hides what is behind it
+    person: bool = False  # targets are upright person-sized boards (0.5 x 1.7 m) instead of round plates
+    enter_s: float = 0.0  # the targets of `paths` appear at this scene time (s)
 
     @property
     def endless(self) -> bool:
@@ -132,6 +144,38 @@ SCENARIOS: dict[str, Scenario] = {
                  script=EndlessScene),
     )
 }
+
+
+PERSON_HALF_W_M = 0.25
+
+
+def near_wall(rng: np.random.Generator, range_m: float) -> Surface:
+    """A wall across the view at `range_m` (16 x 8 m, standing on the ground), textured with 3 cm blobs."""
+    ex, ey, _ = np.eye(3)
+    return Surface("near wall", np.array([0.0, CAMERA_HEIGHT_M - 4.0, range_m]), ex, ey, 8.0, 4.0,
+                   smooth_texture(rng, (800, 1600), 3.0, 30, 170), 0.01)
+
+
+def near_wall_path(wall_m: float, gap_m: float) -> Callable[[float], F64]:
+    """A person walking left and right (±1 m, 6 s period) with the farthest edge of its board `gap_m` in
+    front of a wall at `wall_m`: the board turns to face the gimbal base, so its centre stands
+    gap + half width · sin(bearing) in front of the wall."""
+    def path(t: float) -> F64:
+        x = 1.0 * np.sin(TWO_PI * t / 6.0)
+        lean = PERSON_HALF_W_M * abs(x) / float(np.hypot(x, wall_m))
+        return np.array([x, CAMERA_HEIGHT_M - 0.85, wall_m - gap_m - lean])
+    return path
+
+
+def near_wall_scenario(gap_m: float, wall_m: float = 7.0, light: bool = False, frames: int = 300,
+                       enter_s: float = 3.0) -> Scenario:
+    """A person-sized target walking `gap_m` in front of a wall at `wall_m` from `enter_s` seconds on (the
+    temporal model learns the wall's own deviation first), cameras still (issue 12 item 3); with `light`,
+    the illumination steps and ramps of `illumination`."""
+    return Scenario(f"near-wall-{gap_m:g}{'-light' if light else ''}",
+                    f"person walking {gap_m:g} m in front of a wall at {wall_m:g} m, cameras still",
+                    frames=frames, paths=((1, near_wall_path(wall_m, gap_m)),), enter_s=enter_s,
+                    gain=_illumination_gain if light else _unity, wall_m=wall_m, person=True)
 
 
 def get_scenario(name: str) -> Scenario:
@@ -164,11 +208,22 @@ class SimRig:
         self._foliage = foliage(rng, np.array([-1.3, 1.0, 6.0]), 0.7, 0.5) if scenario.foliage else None
         textures = {1: plate_texture(rng), 2: plate_texture(rng, 150, 235)}
         self.objects = [MovingObject(tid, path, 0.3, textures[min(tid, 2)]) for tid, path in scenario.paths]
+        if scenario.wall_m is not None:
+            static.append(near_wall(rng, scenario.wall_m))
+        if scenario.person:
+            self.objects = [MovingObject(tid, path, PERSON_HALF_W_M, person_texture(rng, 90, 215), half_h_m=0.85)
+                            for tid, path in scenario.paths]
+        if scenario.enter_s > 0:
+            for o in self.objects:
+                o.visible = self._entered
         self.script = scenario.script(seed) if scenario.script is not None else None
         self.renderer = SimRenderer(self.rig, static, seed, noise_sigma)
         self.index = 0
         self._pass_start = 0  # index of the current pass's first frame
         self.last_truth: FrameTruth | None = None
+
+    def _entered(self, t: float) -> bool:
+        return t >= self.scenario.enter_s
 
     @property
     def exhausted(self) -> bool:

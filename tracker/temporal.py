@@ -1,0 +1,223 @@
+"""Temporal candidates: objects that stand too close to their background for the stereo residual.
+
+An object a few per cent of its range in front of its background (a person 0.2 m before a wall at 7 m:
+0.8 px of disparity at f·b = 180 px·m) leaves almost no residual in eq. (9), whose warp is off by that
+disparity only, and fails the stereo verifier's depth-gap test. With the cameras still, the left image's
+temporal model (background B and mean deviation D per pixel, at gain 1; tracker.detect) sees it at once:
+
+1. Candidates, on the stride grid: |Γ - g B| beyond the local range of g B (its min and max over a 3x3
+   cell neighbourhood, so a texture that sways or jitters by a few pixels stays in) by more than
+   ε + 3 g D; g is the frame's global gain, the median of Γ / B over the grid (a light step scales Γ, not
+   the model); rows whose D has not been learnt yet raise nothing. Groups of cells touching objects the
+   stereo stages found stand clear of their background are left to them; an object verified here that
+   is larger than those near their background it touches replaces them (the stereo residual of an
+   object near its background shows only parts of it).
+2. Verification of each group at full resolution: the outline from the temporal model at the ring gain
+   (tracker.verify.temporal_outline); a region whose texture is the background's own relit (zero-mean
+   normalised correlation of Γ with B over it above `max_texture_corr`: a shadow, a local change of
+   light) is dropped; the range comes from matching the region itself between the two cameras
+   (tracker.stereo through the verifier's strips) and must not lie behind the known background by more
+   than `behind_tolerance_px` (a background uncovered where the learnt geometry held an object lies
+   behind it); of a region that also holds something at another depth, the part that is one surface at
+   the matched disparity is kept (and matched again).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from tracker.detect import Box, StereoSubtractor
+from tracker.frames import StereoFrame
+from tracker.rectify import Rectifier
+from tracker.verify import (
+    Blob,
+    Verifier,
+    background_disparity,
+    largest_region,
+    mask_centroid,
+    nearest_hint,
+    temporal_outline,
+)
+
+F32 = NDArray[np.float32]
+F64 = NDArray[np.float64]
+U8 = NDArray[np.uint8]
+_NB = np.ones((3, 3), np.uint8)
+
+
+@dataclass(frozen=True)
+class TemporalConfig:
+    """min_area_px: smallest region (full-resolution pixels); max_texture_corr: ZNCC of Γ with B over a
+    region above which it is the background relit; behind_tolerance_px: how far behind the background
+    (disparity, px; the background's is the median over the region) a region may match; learnt_updates:
+    updates of the background's deviation D a row needs before it raises candidates (each row is updated
+    every 24 frames)."""
+
+    min_area_px: int = 64
+    max_texture_corr: float = 0.6
+    behind_tolerance_px: float = 0.15
+    learnt_updates: int = 3
+
+
+def global_gain(key: U8, bg: F32) -> float | None:
+    """g = median of Γ / B over grid cells whose background is not dark (B > 8); None with too few."""
+    ok = bg > 8.0
+    if int(np.count_nonzero(ok)) < 64:
+        return None
+    return float(np.median(key[ok].astype(np.float32) / bg[ok]))
+
+
+def change_mask(key: U8, bg: F32, dev: F32, g: float, eps: int) -> U8:
+    """Cells (0/255) where Γ lies outside [g min₃ₓ₃ B, g max₃ₓ₃ B] by more than ε + 3 g max₃ₓ₃ D."""
+    hi = np.asarray(cv2.dilate(bg, _NB), np.float32)
+    lo = np.asarray(cv2.erode(bg, _NB), np.float32)
+    lim = np.float32(eps) + np.float32(3.0 * g) * np.asarray(cv2.dilate(dev, _NB), np.float32)
+    k = key.astype(np.float32)
+    gf = np.float32(g)
+    out = (k > gf * hi + lim) | (k < gf * lo - lim)
+    return out.astype(np.uint8) * np.uint8(255)
+
+
+def texture_corr(key: U8, bg: F32, mask: NDArray[np.bool_]) -> float:
+    """Zero-mean normalised correlation of Γ and B over the mask's pixels (1: the same texture)."""
+    a = key[mask].astype(np.float64)
+    b = bg[mask].astype(np.float64)
+    a -= a.mean()
+    b -= b.mean()
+    den = float(np.sqrt((a @ a) * (b @ b)))
+    return float(a @ b) / den if den > 1e-9 else 1.0
+
+
+_WIN = (5, 5)
+
+
+def _same_surface(rect: Rectifier, frame: StereoFrame, box: Box, obj: NDArray[np.bool_], d: float, eps: int
+                  ) -> NDArray[np.bool_]:
+    """The part of a changed region that is one surface at disparity d: pixels whose 5x5 mean of
+    |Γ(x, y) - Θ(x_r, y_r)| is at most 2ε, (x_r, y_r) the raw right pixel of the rectified left point
+    shifted by d; its largest component, grown back by two pixels inside the region. What the region
+    also holds at another depth (a background uncovered next to the object) drops out."""
+    x0, y0, x1, y1 = box
+    rc = rect.rect_of_raw[0][y0:y1, x0:x1]
+    qx, qy = rc[..., 0] - np.float32(d), np.ascontiguousarray(rc[..., 1])
+    ur = cv2.remap(rect.maps[1][0], qx, qy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    vr = cv2.remap(rect.maps[1][1], qx, qy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    theta = cv2.remap(frame.right, ur, vr, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    diff = cv2.blur(cv2.absdiff(frame.left[y0:y1, x0:x1], theta).astype(np.float32), _WIN)
+    same = largest_region(obj & (diff <= 2 * eps))
+    return np.asarray(cv2.dilate(same.view(np.uint8), _NB, iterations=2) > 0) & obj
+
+
+def _overlap(a: Box, b: Box) -> bool:
+    return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
+
+
+def _without_rims(blobs: list[Blob]) -> list[Blob]:
+    """The blobs less those under a tenth of the area of a blob whose box overlaps theirs: the rim left
+    around an object (the verifier's rule for a second object in one box, applied to the outlines)."""
+    return [b for b in blobs if not any(o is not b and _overlap(o.box, b.box) and b.area < o.area // 10
+                                        for o in blobs)]
+
+
+class TemporalDetector:
+    """Candidates and verification from the left temporal model while the cameras are still.
+    `detect(frame, found, hints)` -> all the frame's blobs; `gain` is the last frame's global gain (or None)."""
+
+    def __init__(self, sub: StereoSubtractor, verifier: Verifier, config: TemporalConfig | None = None):
+        self.sub, self.verifier = sub, verifier
+        self.cfg = config or TemporalConfig()
+        self.gain: float | None = None
+
+    def detect(self, frame: StereoFrame, found: list[Blob], hints: F64 | None) -> list[Blob]:
+        """All the frame's objects: those the stereo stages `found`, those of them near their background
+        replaced by the temporal model's object over the changed region they lie in when that is larger,
+        and the changed regions they do not touch verified as new objects."""
+        self.gain = None
+        model = self.sub.left_background(frame.gimbal)
+        if model is None:
+            return found
+        s, eps = self.sub.cfg.stride, self.sub.cfg.epsilon
+        bg, dev = model
+        key, bl = frame.left[::s, ::s], bg[::s, ::s]
+        g = global_gain(key[::2, ::2], bl[::2, ::2])  # every second cell is plenty for a median
+        if g is None:
+            return found
+        self.gain = g
+        fg = change_mask(key, np.ascontiguousarray(bl), np.ascontiguousarray(dev[::s, ::s]), g, eps)
+        learnt = self.sub.learnt_rows(frame.gimbal, self.cfg.learnt_updates)
+        if learnt is not None:
+            fg[~learnt[::s]] = 0  # no deviation known there yet
+        out = list(found)
+        for box in self._groups(fg):
+            covered = [b for b in out if _overlap(b.box, box)]
+            if covered and not all(self._near_background(b) for b in covered):
+                continue  # objects well clear of their background: their stereo outline holds
+            blob = self.verify(frame, box, bg, dev, g, hints)
+            if blob is None or (covered and blob.area <= sum(b.area for b in covered)):
+                continue
+            out = [b for b in out if all(b is not c for c in covered)] + [blob]
+        return _without_rims(out)
+
+    def _near_background(self, b: Blob) -> bool:
+        """Whether a stereo object is within twice the depth-gap test of its background: its residual then
+        shows only parts of it, and the temporal model's outline may hold more."""
+        cfg = self.sub.cfg
+        return b.disparity < b.bg_disparity * (1.0 + 2.0 * cfg.min_depth_gap) + 2.0 * cfg.min_disparity_gap_px
+
+    def _groups(self, fg: U8) -> list[Box]:
+        """Boxes (raw pixels, with the detector's margin) around groups of changed cells large enough."""
+        if cv2.countNonZero(fg) == 0:
+            return []
+        s, m = self.sub.cfg.stride, self.sub.cfg.margin_px
+        w, h = self.sub.bg.rect.rig.left.size
+        n, labels, stats, _ = cv2.connectedComponentsWithStats(cv2.dilate(fg, _NB), connectivity=8)
+        min_cells = max(2, self.cfg.min_area_px // (s * s))
+        out = []
+        for i in range(1, n):
+            x, y, bw, bh, _area = (int(v) for v in stats[i])
+            if cv2.countNonZero((labels[y:y + bh, x:x + bw] == i).view(np.uint8) & fg[y:y + bh, x:x + bw]) < min_cells:
+                continue
+            out.append((max(x * s - m, 0), max(y * s - m, 0), min((x + bw) * s + m, w), min((y + bh) * s + m, h)))
+        return out
+
+    def verify(self, frame: StereoFrame, box: Box, bg: F32, dev: F32, g: float, hints: F64 | None
+               ) -> Blob | None:
+        """One changed region: its outline, the relit-texture test, its own disparity and the test that it
+        does not lie behind the background."""
+        cfg, eps = self.cfg, self.sub.cfg.epsilon
+        x0, y0, x1, y1 = box
+        key, b, d = frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1], dev[y0:y1, x0:x1]
+        region = change_mask(key, b, d, g, eps) > 0
+        obj, gain, _ = temporal_outline(key, b, d, np.zeros_like(region), region, eps)
+        if int(np.count_nonzero(obj)) < cfg.min_area_px:
+            return None
+        if texture_corr(key, b, obj) > cfg.max_texture_corr:
+            return None  # the background's own texture, relit: a shadow or a local change of light
+        fine = self.verifier.match_object(frame, box, obj, nearest_hint(hints, obj, box))
+        if fine is None:
+            return None
+        same = _same_surface(self.verifier.rect, frame, box, obj, fine.disparity, eps)
+        if int(np.count_nonzero(same)) < cfg.min_area_px:
+            return None
+        if int(np.count_nonzero(same)) < 0.9 * int(np.count_nonzero(obj)):  # part of it was something else
+            obj = same
+            fine = self.verifier.match_object(frame, box, obj, fine.disparity)
+            if fine is None:
+                return None
+        m8 = obj.view(np.uint8)
+        area, c_box = mask_centroid(m8)
+        c_raw = c_box + (x0, y0)  # eq. (10)
+        cm = self.sub.correspondence(0, frame.gimbal, box)
+        d_bg = background_disparity(cm, obj, c_raw - (x0, y0))
+        known = obj & cm.valid
+        d_med = float(np.median(cm.disparity[known])) if np.any(known) else d_bg
+        if fine.disparity < d_med - max(cfg.behind_tolerance_px, 3.0 * fine.sigma):
+            return None  # behind the known background: background uncovered, not an object
+        # eq. (10) in rectified coordinates, pixels weighted by their area: Σ a x / Σ a, Σ a y / Σ a
+        sx, sy, sa, _ = cv2.mean(self.verifier.rect.area_moments[y0:y1, x0:x1], mask=m8)
+        return Blob(box, obj, area, c_raw, np.array([sx / sa, sy / sa]), fine.disparity, fine.sigma, d_bg,
+                    fine.score, gain)
