@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import threading
 import time
-from typing import Any
 
 import pytest
 
@@ -37,26 +36,6 @@ def test_a_blocking_consumer_never_stalls_the_publisher() -> None:
         hub.publish(i)
     assert time.perf_counter() - t0 < 5.0  # nothing waited (a generous bound: this is no benchmark)
     assert all(s["queued"] == 2 for s in hub.stats())
-
-
-def test_first_subscriptions_are_served_before_the_others() -> None:
-    hub: Hub[int] = Hub()
-    order: list[str] = []
-
-    def sub(name: str, first: bool = False) -> Any:
-        return hub.subscribe(maxsize=4, notify=lambda: order.append(name), name=name, first=first)
-
-    sub("media")
-    ws1 = sub("ws1", first=True)
-    sub("alarms")
-    sub("ws2", first=True)
-    hub.publish(1)
-    assert order == ["ws1", "ws2", "media", "alarms"]
-    hub.unsubscribe(ws1)
-    sub("ws3", first=True)
-    order.clear()
-    hub.publish(2)
-    assert order == ["ws2", "ws3", "media", "alarms"]
 
 
 def test_subscription_get_ends_when_closed() -> None:

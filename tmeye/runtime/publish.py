@@ -73,27 +73,18 @@ class Hub(Generic[T]):
 
     def __init__(self) -> None:
         self._subs: list[Subscription[T]] = []
-        self._first = 0  # the first subscriptions in _subs
         self._lock = threading.Lock()
 
     def subscribe(self, maxsize: int = 4, notify: Callable[[], Any] | None = None,
-                  name: str = "", first: bool = False) -> Subscription[T]:
-        """first: served before the others at each publish (latency-critical consumers, woken before
-        the threads whose work would compete with theirs for the interpreter)."""
+                  name: str = "") -> Subscription[T]:
         sub: Subscription[T] = Subscription(maxsize, notify, name)
         with self._lock:
-            if first:
-                self._subs.insert(self._first, sub)
-                self._first += 1
-            else:
-                self._subs.append(sub)
+            self._subs.append(sub)
         return sub
 
     def unsubscribe(self, sub: Subscription[T]) -> None:
         with self._lock:
             if sub in self._subs:
-                if self._subs.index(sub) < self._first:
-                    self._first -= 1
                 self._subs.remove(sub)
         sub.close()
 
@@ -120,6 +111,6 @@ class Hub(Generic[T]):
 
     def close(self) -> None:
         with self._lock:
-            subs, self._subs, self._first = list(self._subs), [], 0
+            subs, self._subs = list(self._subs), []
         for sub in subs:
             sub.close()
