@@ -16,7 +16,6 @@ from numpy.typing import NDArray
 
 from tracker.bgdepth import BackgroundDepth
 from tracker.bglearn import LearntBackground, Sighting, StreamLearnConfig, StreamLearner, changed_box
-from tracker.budget import BudgetConfig, VerifyBudget
 from tracker.detect import DetectorConfig, StereoSubtractor, paint_masks
 from tracker.frames import StereoFrame
 from tracker.geometry import StereoRig
@@ -62,13 +61,12 @@ class Pipeline:
 
     def __init__(self, rig: StereoRig, detector: DetectorConfig | None = None,
                  tracker: TrackerConfig | None = None, origin: F64 | None = None,
-                 budget: BudgetConfig | None = None, temporal: TemporalConfig | None = None):
+                 temporal: TemporalConfig | None = None):
         self.rig = rig
         self.rect = Rectifier(rig)
         self.bg = BackgroundDepth(self.rect, near_m=(detector or DetectorConfig()).near_m)
         self.subtractor = StereoSubtractor(self.bg, detector)
         self.verifier = Verifier(self.subtractor, self.rect)
-        self.budget = VerifyBudget(self.subtractor.low_shape, self.subtractor.cfg.stride, budget)
         self.temporal = TemporalDetector(self.subtractor, self.verifier, temporal)
         self.localizer = Localizer(self.rect, origin)
         self.tracker = MultiTracker(tracker)
@@ -115,7 +113,6 @@ class Pipeline:
         t1 = time.perf_counter()
         hints = self.tracker.predictions(frame.t)
         boxes = cands.worth_verifying(self.subtractor.cfg.moving_min_cells, hints)
-        boxes = self.budget.select(boxes, dict(zip(cands.boxes, cands.cells, strict=True)), hints)
         blobs = [b for box in boxes for b in self.verifier.verify_all(frame, box, hints)]
         blobs = self.temporal.detect(frame, blobs, hints)  # cameras still: objects too near their background
         t2 = time.perf_counter()
