@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 from tracker.frames import GimbalState, StereoFrame
 from tracker.geometry import Camera, StereoRig, gimbal_rotation
 from tracker.sim.scene import Surface
-from tracker.sim.static_cast import StaticScene, _Plan
+from tracker.sim.static_cast import Plan, StaticScene
 
 F64 = NDArray[np.float64]
 F32 = NDArray[np.float32]
@@ -212,7 +212,7 @@ class SimRenderer:
         n = np.round(rng.standard_normal((h + 64, w)) * sigma).clip(-60, 60)
         return np.maximum(n, 0).astype(np.uint8), np.maximum(-n, 0).astype(np.uint8)
 
-    def _both(self, fn: Callable[[int, _Plan | None], _T], R_wr: F64 | None) -> tuple[_T, _T]:
+    def _both(self, fn: Callable[[int, Plan | None], _T], R_wr: F64 | None) -> tuple[_T, _T]:
         """(fn(0, plan 0), fn(1, plan 1)), camera 0's on the helper thread: both plans are made on this
         thread (small numpy steps holding the GIL), camera 0's draw overlapping camera 1's plan. Two whole
         renders on two threads instead fight over the GIL at every step. R_wr None: no static render, the
@@ -227,7 +227,7 @@ class SimRenderer:
             out = first.result()
         return out, second
 
-    def _static_camera(self, plan: _Plan, R_wr: F64) -> tuple[U8, F32]:
+    def _static_camera(self, plan: Plan, R_wr: F64) -> tuple[U8, F32]:
         """A camera's static image (H, W) uint8 and inverse distances 1/z (1/m), (H, W) float32, drawn from
         its plan."""
         view = self.views[plan.k]
@@ -249,7 +249,7 @@ class SimRenderer:
             return hit
         R_wr = gimbal_rotation(gimbal.pan_deg, gimbal.tilt_deg)
 
-        def static(_k: int, plan: _Plan | None) -> tuple[U8, F32]:
+        def static(_k: int, plan: Plan | None) -> tuple[U8, F32]:
             assert plan is not None  # planned: R_wr is given
             return self._static_camera(plan, R_wr)
 
@@ -277,7 +277,7 @@ class SimRenderer:
         R_wr = gimbal_rotation(gimbal.pan_deg, gimbal.tilt_deg)
         offsets = [int(self._rng.integers(0, 64)) if noisy else 0 for _ in range(2)]
 
-        def camera(k: int, plan: _Plan | None) -> tuple[U8, U8, U8, F32]:
+        def camera(k: int, plan: Plan | None) -> tuple[U8, U8, U8, F32]:
             if plan is not None:
                 base_img, base_inv = self._static_camera(plan, R_wr)
             else:

@@ -314,7 +314,7 @@ def _node_values(grid: _Grid, node: NDArray[np.int16], H: F64) -> F32:
 
 
 @dataclass(frozen=True)
-class _Plan:
+class Plan:
     """Camera k's sparse render: (X, Y, W) at the nodes (3, ny, nx) float32 (None: every plane is within
     0.1 m of the camera, nothing drawn), and at the padded pixels idx (N,) cast one by one, (3, N); and the
     surfaces left to the caller (off the atlas, or planes within 0.1 m of the camera), in scene order."""
@@ -347,7 +347,7 @@ class StaticScene:
         img, W = self.draw(plan)
         return img, W, plan.rest
 
-    def plan(self, k: int, R_wr: F64) -> _Plan:
+    def plan(self, k: int, R_wr: F64) -> Plan:
         """The sparse part of camera k's image at R_wr: which surface each cell sees, (X, Y, W) at the nodes
         and at the pixels cast one by one. Many small numpy steps that hold the GIL most of the time: run
         the planning of both cameras on one thread and overlap it with draw(), which is a few large OpenCV
@@ -358,7 +358,7 @@ class StaticScene:
         too_near = {id(s) for s, n in zip(self._fast, near, strict=True) if n}
         rest = [s for s in self.surfaces if id(s) not in self._fast_ids or id(s) in too_near]
         if near.all():
-            return _Plan(k, None, np.zeros(0, np.int64), np.zeros((3, 0), np.float32), rest)
+            return Plan(k, None, np.zeros(0, np.int64), np.zeros((3, 0), np.float32), rest)
         centre, half = p.centre, p.half
         if near.any():
             H, centre, half = H[~near], centre[~near], half[~near]
@@ -375,9 +375,9 @@ class StaticScene:
             idx = np.concatenate([idx, extra])
             vals = np.hstack([vals, _surface_values(H, np.repeat(cell[more], STEP * STEP),
                                                     grid.xy_pad[0][extra], grid.xy_pad[1][extra])])
-        return _Plan(k, _node_values(grid, node, H), idx, vals, rest)
+        return Plan(k, _node_values(grid, node, H), idx, vals, rest)
 
-    def draw(self, plan: _Plan) -> tuple[U8, F32]:
+    def draw(self, plan: Plan) -> tuple[U8, F32]:
         """A plan's image (H, W) uint8 and inverse distances 1/z (H, W) float32: the node values
         interpolated (one cv2.resize), the pixels cast one by one put in, divided by W and textured (one
         cv2.remap)."""
