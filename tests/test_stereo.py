@@ -230,9 +230,9 @@ def test_match_point_answers_with_the_window_most_others_agree_with(monkeypatch:
     img = np.zeros((40, 60), np.uint8)
 
     def answers(by_shift: dict[tuple[int, int], tuple[float, float] | None]) -> float | None:
-        def fake(_l: object, _r: object, x: float, y: float, _d: int, **_k: object) -> tuple[float, float] | None:
+        def fake(_l: object, _r: object, x: float, y: float, _d: int, _o: object) -> tuple[float, float] | None:
             return by_shift[(round(x) - 30, round(y) - 20)]
-        monkeypatch.setattr(pm, "match_window", fake)
+        monkeypatch.setattr(pm, "_match_window", fake)
         return pm.match_point(img, img, 30.0, 20.0, 16)
 
     # the centre straddles an edge (d 3.0); three shifted windows lie on the point's surface (d near 8)

@@ -13,6 +13,7 @@ most others agree with (within `tolerance` px; the better score breaks ties), an
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any
 
 import cv2
@@ -26,6 +27,24 @@ from tracker.stereo_lk import refine_2d, support_weights
 F32 = NDArray[np.float32]
 
 
+@dataclass(frozen=True)
+class WindowOptions:
+    """match_window's keyword arguments (see there)."""
+
+    window: int = 11
+    min_std: float = 2.0
+    min_score: float = 0.5
+    uniqueness: float = 0.05
+    lr_tolerance: float = 1.5
+    max_sigma: float = 0.2
+    support_gamma: float = 15.0
+    max_row_offset: float = 1.0
+
+
+_D = WindowOptions()
+
+
+
 def match_point(left: U8, right: U8, x: float, y: float, max_disparity: int, *, votes: int = 3,
                 tolerance: float = 0.5, shift: int = 4, **options: Any) -> float | None:
     """Disparity d (px) of the left point (x, y) in a rectified pair, right x = x - d; None if unreliable.
@@ -36,8 +55,10 @@ def match_point(left: U8, right: U8, x: float, y: float, max_disparity: int, *, 
     `votes` (itself included). Raises FrameError / ValueError (one-line message) for bad arguments."""
     if isinstance(votes, bool) or not isinstance(votes, int) or not 1 <= votes <= 5:
         raise ValueError(f"votes must be an integer in 1..5, got {votes!r}")
+    opts = WindowOptions(**options)
+    left, right, x, y = _checked(left, right, x, y, max_disparity, opts.window)
     answers = [m for dx, dy in ((0, 0), (-shift, 0), (shift, 0), (0, -shift), (0, shift))
-               if (m := match_window(left, right, x + dx, y + dy, max_disparity, **options)) is not None]
+               if (m := _match_window(left, right, x + dx, y + dy, max_disparity, opts)) is not None]
     best: tuple[tuple[int, float], float] | None = None
     for d, score in answers:
         n = sum(abs(e - d) <= tolerance for e, _ in answers)
@@ -53,14 +74,14 @@ def match_window(
     y: float,
     max_disparity: int,
     *,
-    window: int = 11,
-    min_std: float = 2.0,
-    min_score: float = 0.5,
-    uniqueness: float = 0.05,
-    lr_tolerance: float = 1.5,
-    max_sigma: float = 0.2,
-    support_gamma: float = 15.0,
-    max_row_offset: float = 1.0,
+    window: int = _D.window,
+    min_std: float = _D.min_std,
+    min_score: float = _D.min_score,
+    uniqueness: float = _D.uniqueness,
+    lr_tolerance: float = _D.lr_tolerance,
+    max_sigma: float = _D.max_sigma,
+    support_gamma: float = _D.support_gamma,
+    max_row_offset: float = _D.max_row_offset,
 ) -> tuple[float, float] | None:
     """(d, score): disparity d (px) of the left point (x, y) in a rectified pair, right x = x - d, from one
     window centred on the point, and the refined correlation score of the match; None if unreliable.
@@ -78,39 +99,53 @@ def match_window(
     it moved more than 1 px or the row offset exceeds max_row_offset px, or the right-to-left search does
     not return within lr_tolerance px. Raises FrameError / ValueError (one-line message) for bad arguments.
     """
+    opts = WindowOptions(window, min_std, min_score, uniqueness, lr_tolerance, max_sigma, support_gamma,
+                         max_row_offset)
+    left, right, x, y = _checked(left, right, x, y, max_disparity, window)
+    return _match_window(left, right, x, y, max_disparity, opts)
+
+
+def _checked(left: U8, right: U8, x: float, y: float, max_disparity: int, window: int) -> tuple[U8, U8, float, float]:
+    """The arguments of match_window checked (FrameError / ValueError with a one-line message)."""
     left, right = check_images(left, right, max_disparity)
     if isinstance(window, bool) or not isinstance(window, int) or window < 3 or window % 2 == 0:
         raise ValueError(f"window must be an odd integer >= 3, got {window!r}")
     x, y = float(x), float(y)
     if not (math.isfinite(x) and math.isfinite(y)):
         raise ValueError(f"point must be finite, got ({x}, {y})")
+    return left, right, x, y
+
+
+def _match_window(left: U8, right: U8, x: float, y: float, max_disparity: int, o: WindowOptions
+                  ) -> tuple[float, float] | None:
+    """match_window on checked arguments."""
     H, W = left.shape
-    h = window // 2
+    h = o.window // 2
     xc = round(x)
     if not (h <= y < H - h - 1 and xc + h + PAD < W):
         return None
     dmax = min(max_disparity, xc - h - PAD)  # clip the search at the image's left edge
     if dmax < 2:
         return None
-    T = np.asarray(cv2.getRectSubPix(left, (window, window), (xc, y), patchType=cv2.CV_32F), np.float32)
-    if float(cv2.meanStdDev(T)[1][0, 0]) < min_std:
+    T = np.asarray(cv2.getRectSubPix(left, (o.window, o.window), (xc, y), patchType=cv2.CV_32F), np.float32)
+    if float(cv2.meanStdDev(T)[1][0, 0]) < o.min_std:
         return None
     xs0 = xc - h - dmax - PAD  # image column of the strip's first column
-    ws = dmax + window + 2 * PAD
+    ws = dmax + o.window + 2 * PAD
     S = np.asarray(
-        cv2.getRectSubPix(right, (ws, window), (xs0 + 0.5 * (ws - 1), y), patchType=cv2.CV_32F), np.float32
+        cv2.getRectSubPix(right, (ws, o.window), (xs0 + 0.5 * (ws - 1), y), patchType=cv2.CV_32F), np.float32
     )
-    w = support_weights(T, support_gamma)
-    fit = match_strip(T, S, w, dmax + PAD, dmax, min_score, uniqueness)
+    w = support_weights(T, o.support_gamma)
+    fit = match_strip(T, S, w, dmax + PAD, dmax, o.min_score, o.uniqueness)
     if fit is None:
         return None
     fine = refine_2d(T, right, xc, y, fit.d, w)
-    if fine is None or fine.sigma > max_sigma or abs(fine.d - fit.d) > 1.0 or abs(fine.dy) > max_row_offset:
+    if fine is None or fine.sigma > o.max_sigma or abs(fine.d - fit.d) > 1.0 or abs(fine.dy) > o.max_row_offset:
         return None
     d = _refine_on_row(T, right, w, xs0, ws, y + fine.dy, dmax + PAD - fine.d)
     if d is None or abs(d - fine.d) > 0.5 or not 0.0 <= d <= max_disparity:
         return None
-    if not _lr_consistent(left, right, x, x - d, y, h, max_disparity, lr_tolerance):
+    if not _lr_consistent(left, right, x, x - d, y, h, max_disparity, o.lr_tolerance):
         return None
     return d, fit.score
 
@@ -127,8 +162,6 @@ def _refine_on_row(T: F32, right: U8, w: F32, xs0: int, ws: int, y: float, p0: f
     fit = refine_strip(T, S, w.ravel().astype(np.float64), p0, k)
     offset = ws - T.shape[1] - PAD  # strip position p <-> disparity d = offset - p
     return None if fit is None else offset + fit.d
-
-
 
 
 def _lr_consistent(left: U8, right: U8, x: float, xr: float, y: float, h: int, dmax: int, tol: float) -> bool:

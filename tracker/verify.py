@@ -270,12 +270,9 @@ class Verifier:
         """The object's disparity from matching its own pixels (a search over the whole range first when
         no prior d0 is known). None without a match, or with one the image edge may have cut short (the
         right camera may not see it)."""
+        d0 = self._coarse_disparity(frame, box, obj, d0)
         if d0 is None:
-            strips = self._strips(frame, box, obj, None)
-            coarse = None if strips is None else strips.match(obj, None, 0)
-            if coarse is None:
-                return None
-            d0 = coarse.disparity
+            return None
         strips = self._strips(frame, box, obj, d0)
         fine = None if strips is None else strips.match(obj, d0, 4)
         if fine is None or strips is None or (strips.clipped and fine.disparity > strips.d_hi - 2.0):
@@ -288,12 +285,9 @@ class Verifier:
         occlusion shadows of both keys drop out (verification by warping in both directions).
         Returns that mask, the union of the two masks, and the disparity used (the track's prediction,
         or for a new object a search over the whole range)."""
+        d_hint = self._coarse_disparity(frame, box, m_left, d_hint)
         if d_hint is None:
-            strips = self._strips(frame, box, m_left, None)
-            coarse = None if strips is None else strips.match(m_left, None, 0)
-            if coarse is None:
-                return None
-            d_hint = coarse.disparity
+            return None
         m_right = self._right_key_at(frame, box, d_hint)
         obj = _largest(m_left & m_right)
         if int(np.count_nonzero(obj)) < self.cfg.min_area_px:
@@ -301,6 +295,14 @@ class Verifier:
         # the rest of the object: where the right key sees it at this disparity, or next to the solid
         near = cv2.dilate(obj.astype(np.uint8), _NEAR) > 0
         return obj, m_right | (m_left & near), d_hint
+
+    def _coarse_disparity(self, frame: StereoFrame, box: Box, region: BoolA, d0: float | None) -> float | None:
+        """d0 if known, else the region's disparity from a search over the whole range (None: no match)."""
+        if d0 is not None:
+            return d0
+        strips = self._strips(frame, box, region, None)
+        coarse = None if strips is None else strips.match(region, None, 0)
+        return None if coarse is None else coarse.disparity
 
     def _strips(self, frame: StereoFrame, box: Box, region: BoolA, d_hint: float | None) -> _Strips | None:
         """Rectified left/right strips around a region's rows, wide enough for the disparity search."""
