@@ -17,6 +17,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import least_squares
@@ -92,6 +93,7 @@ class BAResult:
     seconds: float
     nfev: int
     recentred: bool
+    disparity_std_px: float = 0.0  # σ of the disparity of a far point straight ahead (px at the left fx)
 
     @property
     def view_rms(self) -> F64:
@@ -184,7 +186,8 @@ def bundle_adjust(inp: BAInput) -> BAResult:
         max_nfev=200, tr_options={"atol": 1e-14, "btol": 1e-14, "maxiter": 2000},
     )
     intr, R, T, poses = lay.unpack(sol.x)
-    std = _std_from_jacobian(sol.jac, sol.fun, lay.size)
+    cov = _cov_from_jacobian(sol.jac, sol.fun, lay.size)
+    std = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     std_intr = np.zeros_like(intr)
     std_intr[:, lay.free] = std[: lay.ext_at].reshape(C, lay.nf)
     std_ext = std[lay.ext_at : lay.pose_at] if C == 2 else np.zeros(6)
@@ -193,21 +196,60 @@ def bundle_adjust(inp: BAInput) -> BAResult:
         intr, poses, R, T, euler, _full_residuals(sol.fun, inp), std_intr,
         std_ext[:3] if C == 2 else np.zeros(3), std_ext[3:] if C == 2 else np.zeros(3),
         time.perf_counter() - t0, int(sol.nfev), bool(recentred),
+        far_disparity_std(lay, sol.x, cov) if C == 2 else 0.0,
     )
 
 
-def _std_from_jacobian(jac: object, fun: F64, n: int) -> F64:
-    """One-sigma parameter uncertainties sqrt(diag((JᵀJ)⁻¹) σ²), σ² = Σr² / (m - n)."""
+def _cov_from_jacobian(jac: object, fun: F64, n: int) -> F64:
+    """Parameter covariance (JᵀJ)⁻¹ σ², σ² = Σr² / (m - n), shape (n, n) (NaN if it cannot be formed)."""
     J = jac.toarray() if hasattr(jac, "toarray") else np.asarray(jac)
     m = len(fun)
     sigma2 = float(fun @ fun) / max(m - n, 1)
-    JTJ = J.T @ J
     try:
-        cov = np.linalg.pinv(JTJ, rcond=1e-15)
+        cov = np.linalg.pinv(J.T @ J, rcond=1e-15)
     except np.linalg.LinAlgError:
-        return np.full(n, np.nan)
-    out: F64 = np.sqrt(np.clip(np.diag(cov), 0.0, None) * sigma2)
+        return np.full((n, n), np.nan)
+    out: F64 = cov * sigma2
     return out
+
+
+def far_disparity_std(lay: _Layout, x: F64, cov: F64, h: float = 1e-6) -> float:
+    """σ (px, at the left camera's fx) of the disparity the rig gives a point at infinity on the left
+    camera's axis: zero for the adjusted parameters, moved by any of their errors. Its gradient over the
+    intrinsics and the extrinsics (forward differences) through their joint covariance: the marginal
+    σ of the relative yaw alone overstates it many times, since a yaw and a shift of the right principal
+    point move the right image alike and the adjustment tells only their sum well."""
+    from calibration.initial import intr_matrices  # initial.py imports this module
+
+    n = lay.pose_at
+    intr, R, _T, _ = lay.unpack(x)
+    K_l = intr_matrices(intr[0])[0]
+    K_r, d_r = intr_matrices(intr[1])
+    u_l = K_l[:2, 2].reshape(1, 1, 2)  # the left axis: the principal point (no distortion there)
+    u_r = np.asarray(cv2.projectPoints(np.array([[0.0, 0.0, 1.0]]), cv2.Rodrigues(R)[0], np.zeros(3), K_r, d_r)[0],
+                     np.float64)
+    base = _far_disparity(lay, x, u_l, u_r)
+    grad = np.empty(n)
+    for i in range(n):
+        step = h * max(abs(float(x[i])), 1.0)
+        xp = x.copy()
+        xp[i] += step
+        grad[i] = (_far_disparity(lay, xp, u_l, u_r) - base) / step
+    var = float(grad @ cov[:n, :n] @ grad)
+    return float(K_l[0, 0] * np.sqrt(max(var, 0.0)))
+
+
+def _far_disparity(lay: _Layout, x: F64, u_l: F64, u_r: F64) -> float:
+    """The angle (rad) between the rays of raw pixels u_l and u_r seen by the rig of parameters x, along
+    the baseline: the disparity of a far point divided by the focal length."""
+    from calibration.initial import intr_matrices
+
+    intr, R, T, _ = lay.unpack(x)
+    (K_l, d_l), (K_r, d_r) = intr_matrices(intr[0]), intr_matrices(intr[1])
+    m_l = np.r_[cv2.undistortPoints(u_l, K_l, d_l).reshape(2), 1.0]
+    m_r = R.T @ np.r_[cv2.undistortPoints(u_r, K_r, d_r).reshape(2), 1.0]  # into the left camera's frame
+    t = R.T @ T  # from the right lens centre to the left one, in the left frame (the baseline)
+    return float((m_l / np.linalg.norm(m_l) - m_r / np.linalg.norm(m_r)) @ (t / np.linalg.norm(t)))
 
 
 def _full_residuals(fun: F64, inp: BAInput) -> F64:

@@ -34,6 +34,7 @@ def summary(cal: StereoCalibration, model: str = "pinhole") -> dict[str, object]
         "R": ba.R.tolist(),
         "T": ba.T.tolist(),
         "T_std": ba.std_T.tolist(),
+        "disparity_offset_std_px": ba.disparity_std_px,
         "K_left": rig.left.K.tolist(),
         "K_right": rig.right.K.tolist(),
         "dist_left": rig.left.dist.tolist(),

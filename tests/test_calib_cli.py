@@ -66,6 +66,11 @@ def test_cli_writes_rig_json_and_report(sim: Path, tmp_path: Path, capsys: pytes
     assert rig.baseline == pytest.approx(0.30, rel=2e-3)
     np.testing.assert_allclose(rig.left.K, default_rig().left.K, rtol=3e-3, atol=1.5)
     assert json.loads(out.read_text())["calibration"]["model"] == "pinhole"
+    # the disparity offset's σ, through the joint covariance: well below what the yaw's marginal σ alone
+    # would say (yaw and the right principal point move the right image alike; their sum is well known)
+    f = float(rig.left.K[0, 0])
+    assert 0.0 < s["disparity_offset_std_px"] < 0.5 * f * np.radians(s["euler_std_deg"][1])
+    assert rig.sigma.disparity_px == s["disparity_offset_std_px"] and rig.sigma.principal_px[0] > 0
     img = cv2.imread(str(rep))
     assert img is not None and img.shape[1] == 1200
 

@@ -16,6 +16,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from tracker.calib_sigma import CalibrationSigma
+
 F64 = NDArray[np.float64]
 F32 = NDArray[np.float32]
 
@@ -153,6 +155,7 @@ class StereoRig:
 
     left: Camera
     right: Camera
+    sigma: CalibrationSigma = field(default_factory=CalibrationSigma, compare=False)  # the calibration's own
 
     @property
     def R(self) -> F64:
@@ -203,7 +206,8 @@ class StereoRig:
         if left.size != right.size:
             raise RigError(f"field right.size: {right.size} differs from left.size {left.size}")
         check_baseline(left.R_rc, left.c, right.c, baseline_limits_m or BASELINE_LIMITS_M)
-        return StereoRig(left, right)
+        cal = d.get("calibration")
+        return StereoRig(left, right, CalibrationSigma() if cal is None else CalibrationSigma.from_section(cal))
 
 
 def save_rig(rig: StereoRig, path: str | Path, extra: dict[str, object] | None = None) -> None:

@@ -65,7 +65,8 @@ class Localization:
 
 
 class Localizer:
-    """Rectified centroid + disparity -> 3-D point and spherical coordinates with uncertainties."""
+    """Rectified centroid + disparity -> 3-D point and spherical coordinates with uncertainties: the image
+    noise of the centroid and of the disparity, and the calibration's own (the rig's `sigma`)."""
 
     def __init__(self, rect: Rectifier, origin: F64 | None = None, centroid_sigma_px: float = 0.05):
         self.rect = rect
@@ -78,8 +79,10 @@ class Localizer:
         X_rig = self.rect.rect_to_rig(x, y, disparity)  # eq. (2)
         J = self.rect.rig_to_rect_jacobian(x, y, disparity)
         s_c = max(self.centroid_sigma_px, 0.5 / np.sqrt(max(area, 1)))
-        S = np.diag([s_c**2, s_c**2, max(disparity_sigma, 0.02) ** 2])
-        cov_rig = J @ S @ J.T
+        cal = self.rect.rig.sigma  # the calibration's own uncertainty (tracker.calib_sigma)
+        (s_cx, s_cy), s_dcal = cal.principal_px, cal.disparity_px * self.rect.f / float(self.rect.rig.left.K[0, 0])
+        S = np.diag([s_c**2 + s_cx**2, s_c**2 + s_cy**2, max(disparity_sigma, 0.02) ** 2 + s_dcal**2])
+        cov_rig = J @ S @ J.T + cal.scale_rel**2 * np.outer(X_rig, X_rig)  # f·b off by ε: X -> (1 + ε) X
         g = gimbal or GimbalState()
         R_wr = gimbal_rotation(g.pan_deg, g.tilt_deg)
         X_w = R_wr @ X_rig

@@ -25,7 +25,7 @@ class RigError(ValueError):
     """A rig field is malformed or implausible; the message names the field and is one line."""
 
 
-def _matrix(d: dict[str, Any], key: str, name: str, shape: tuple[int, ...], default: Any = None) -> F64:
+def matrix_field(d: dict[str, Any], key: str, name: str, shape: tuple[int, ...], default: Any = None) -> F64:
     """Field `key` of `d` as a finite float64 array of exactly `shape`; RigError naming `name` otherwise."""
     if key not in d:
         if default is None:
@@ -56,20 +56,20 @@ def camera_fields(d: object, side: str) -> dict[str, Any]:
     """The checked fields of one camera: K (3, 3) px, dist (5,), size (w, h) px, R_rc (3, 3), c (3,) m."""
     if not isinstance(d, dict):
         raise RigError(f"field {side}: missing or not an object")
-    K = _matrix(d, "K", f"{side}.K", (3, 3))
+    K = matrix_field(d, "K", f"{side}.K", (3, 3))
     fx, fy = float(K[0, 0]), float(K[1, 1])
     if not (fx > 0 and fy > 0):
         raise RigError(f"field {side}.K: focal lengths must be positive, got fx {fx:g}, fy {fy:g}")
     if not np.allclose(K[2], [0.0, 0.0, 1.0]) or K[1, 0] != 0.0:
         raise RigError(f"field {side}.K: not an upper-triangular intrinsic matrix with last row 0 0 1")
-    dist = _matrix(d, "dist", f"{side}.dist", (5,))
+    dist = matrix_field(d, "dist", f"{side}.dist", (5,))
     size = d.get("size")
     if (not isinstance(size, list) or len(size) != 2
             or not all(isinstance(v, int) and not isinstance(v, bool) and v > 0 for v in size)):
         raise RigError(f"field {side}.size: must be two positive whole numbers [width, height], got {size!r}")
-    R_rc = _matrix(d, "R_rc", f"{side}.R_rc", (3, 3), np.eye(3))
+    R_rc = matrix_field(d, "R_rc", f"{side}.R_rc", (3, 3), np.eye(3))
     check_rotation(R_rc, f"{side}.R_rc")
-    c = _matrix(d, "c", f"{side}.c", (3,), np.zeros(3))
+    c = matrix_field(d, "c", f"{side}.c", (3,), np.zeros(3))
     return {"K": K, "dist": dist, "size": (int(size[0]), int(size[1])), "R_rc": R_rc, "c": c}
 
 

@@ -1,0 +1,82 @@
+"""The calibration's own uncertainty, as it moves a localisation (issue 12 item 1).
+
+A rig file written by `tmeye calibrate` keeps, under "calibration", the one-sigma of the bundle
+adjustment's parameters (paper eq. 5-8): the intrinsics of each camera, the stereo translation T and the
+Euler angles (δ, φ, γ) of eq. (6). Three of their effects on r, θ, φ are first-order and large:
+
+- scale: z = f b / d (eq. 2) scales with f and b, and x, y with z, so a relative error ε of f·b moves
+  the point X to (1 + ε) X: σ_ε² = (σ_b / b)² + ((σ_fx / fx)²_left + (σ_fx / fx)²_right) / 2, with
+  σ_b = |T̂ · σ_T| (T̂ the baseline's direction; units cancel);
+- disparity offset: errors of the relative yaw and of the principal points shift the right image
+  sideways, every disparity by the same amount; the calibration writes its σ ("disparity_offset_std_px",
+  px at the left camera's fx), propagated through the adjustment's joint covariance. The marginal σ of
+  the yaw is no substitute: the yaw and the right principal point move the image alike, and the
+  adjustment knows their sum far better than either (on the simulated rig, 15 board pairs: f σ_φ gave
+  0.32 px where the disparity's actual error was about 0.025 px). Older rig files without the figure get
+  no disparity term;
+- principal point: the left camera's (σ_cx, σ_cy) px move the centroid's rays, and with them θ and φ.
+
+A rig without the section (a simulated rig, another tool's file) has none of these: `CalibrationSigma()`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from tracker.rigcheck import RigError, matrix_field
+
+
+@dataclass(frozen=True)
+class CalibrationSigma:
+    """scale_rel: σ of f·b as a fraction; disparity_px: σ of the disparity offset (px at the left camera's
+    fx); principal_px: the left camera's (σ_cx, σ_cy) (px)."""
+
+    scale_rel: float = 0.0
+    disparity_px: float = 0.0
+    principal_px: tuple[float, float] = (0.0, 0.0)
+
+    @staticmethod
+    def from_section(cal: object) -> CalibrationSigma:
+        """From a rig file's "calibration" object; RigError naming calibration.FIELD when one is malformed.
+        Fields absent from it count as known exactly."""
+        if not isinstance(cal, dict):
+            raise RigError("field calibration: must be an object")
+        T = matrix_field(cal, "T", "calibration.T", (3,), [0.0, 0.0, 0.0])
+        T_std = matrix_field(cal, "T_std", "calibration.T_std", (3,), [0.0, 0.0, 0.0])
+        d_std = float(matrix_field(cal, "disparity_offset_std_px", "calibration.disparity_offset_std_px", (), 0.0))
+        if d_std < 0:
+            raise RigError(f"field calibration.disparity_offset_std_px: must be >= 0, got {d_std}")
+        b = float(np.linalg.norm(T))
+        sigma_b_rel = abs(float(T @ T_std)) / (b * b) if b > 0 else 0.0
+        f_rel = [_rel(cal, side, "fx") for side in ("left", "right")]
+        cx, cy = _std(cal, "left", "cx"), _std(cal, "left", "cy")
+        scale = math.sqrt(sigma_b_rel**2 + (f_rel[0] ** 2 + f_rel[1] ** 2) / 2.0)
+        return CalibrationSigma(scale, d_std, (cx, cy))
+
+
+def _std(cal: dict[str, Any], side: str, name: str) -> float:
+    """calibration.intrinsics_std.SIDE.NAME as a non-negative finite number (0 when absent)."""
+    block = cal.get("intrinsics_std", {})
+    sub = block.get(side, {}) if isinstance(block, dict) else None
+    if not isinstance(sub, dict):
+        raise RigError(f"field calibration.intrinsics_std.{side}: must be an object")
+    v = sub.get(name, 0.0)
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
+        raise RigError(f"field calibration.intrinsics_std.{side}.{name}: must be a finite number >= 0, got {v!r}")
+    return float(v)
+
+
+def _rel(cal: dict[str, Any], side: str, name: str) -> float:
+    """σ / value of a focal length: the std over the camera's own K (calibration.K_SIDE)."""
+    s = _std(cal, side, name)
+    if s == 0.0:
+        return 0.0
+    K = matrix_field(cal, f"K_{side}", f"calibration.K_{side}", (3, 3))
+    f = float(K[0, 0] if name == "fx" else K[1, 1])
+    if not f > 0:
+        raise RigError(f"field calibration.K_{side}: focal length must be positive, got {f}")
+    return s / f
