@@ -79,9 +79,11 @@ def test_a_principal_point_uncertainty_widens_the_angles(tmp_path: Path) -> None
 @pytest.mark.parametrize(("section", "message"), [
     ([1, 2], "field calibration: must be an object"),
     ({"T_std": [0.1, "x", 0]}, "field calibration.T_std: not an array of numbers"),
-    ({"disparity_offset_std_px": float("nan")}, "calibration.disparity_offset_std_px: holds a non-finite"),
-    ({"disparity_offset_std_px": -0.1}, "calibration.disparity_offset_std_px: must be >= 0"),
-    ({"intrinsics_std": {"left": {"fx": -1.0}}}, "calibration.intrinsics_std.left.fx: must be a finite number"),
+    ({"T_std": [0.1, 0.2]}, "field calibration.T_std: must have shape"),
+    ({"disparity_offset_std_px": float("inf")}, "calibration.disparity_offset_std_px: must be numbers >= 0"),
+    ({"disparity_offset_std_px": -0.1}, "calibration.disparity_offset_std_px: must be numbers >= 0"),
+    ({"intrinsics_std": {"left": {"fx": -1.0}}}, "calibration.intrinsics_std.left.fx: must be numbers >= 0"),
+    ({"intrinsics_std": {"left": {"cx": "big"}}}, "calibration.intrinsics_std.left.cx: not a number"),
 ])
 def test_malformed_calibration_figures_name_the_field(tmp_path: Path, section: object, message: str) -> None:
     rig = default_rig()
@@ -95,3 +97,13 @@ def test_malformed_calibration_figures_name_the_field(tmp_path: Path, section: o
         load_rig(path)
     with pytest.raises(RigError):
         StereoRig.from_dict(data)
+
+
+def test_sigmas_the_calibration_could_not_estimate_count_as_not_modelled(tmp_path: Path) -> None:
+    rig = default_rig()
+    section = _section(rig, d_std=0.1, c_std=2.0)
+    section["disparity_offset_std_px"] = float("nan")  # json writes NaN, and reads it back
+    section["intrinsics_std"] = {"left": {"cx": float("nan"), "cy": 2.0}, "right": {}}
+    save_rig(rig, tmp_path / "rig.json", section)
+    sigma = load_rig(tmp_path / "rig.json").sigma
+    assert sigma.disparity_px == 0.0 and sigma.principal_px == (0.0, 2.0)

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from tracker.rigcheck import RigError, matrix_field
 
@@ -42,14 +43,12 @@ class CalibrationSigma:
     @staticmethod
     def from_section(cal: object) -> CalibrationSigma:
         """From a rig file's "calibration" object; RigError naming calibration.FIELD when one is malformed.
-        Fields absent from it count as known exactly."""
+        Fields absent from it, and σ the calibration could not estimate (NaN), count as not modelled (0)."""
         if not isinstance(cal, dict):
             raise RigError("field calibration: must be an object")
         T = matrix_field(cal, "T", "calibration.T", (3,), [0.0, 0.0, 0.0])
-        T_std = matrix_field(cal, "T_std", "calibration.T_std", (3,), [0.0, 0.0, 0.0])
-        d_std = float(matrix_field(cal, "disparity_offset_std_px", "calibration.disparity_offset_std_px", (), 0.0))
-        if d_std < 0:
-            raise RigError(f"field calibration.disparity_offset_std_px: must be >= 0, got {d_std}")
+        T_std = _sigmas(cal, "T_std", (3,))
+        d_std = float(_sigmas(cal, "disparity_offset_std_px", ()))
         b = float(np.linalg.norm(T))
         sigma_b_rel = abs(float(T @ T_std)) / (b * b) if b > 0 else 0.0
         f_rel = [_rel(cal, side, "fx") for side in ("left", "right")]
@@ -58,16 +57,33 @@ class CalibrationSigma:
         return CalibrationSigma(scale, d_std, (cx, cy))
 
 
+def _sigmas(d: dict[str, Any], key: str, shape: tuple[int, ...], where: str = "calibration") -> NDArray[np.float64]:
+    """Field `key` of `d`: standard deviations of `shape`, each a number >= 0 or NaN (not estimated: 0
+    here); zeros when absent. RigError naming WHERE.KEY otherwise."""
+    name = f"{where}.{key}"
+    if key not in d:
+        return np.zeros(shape)
+    v = d[key]
+    if isinstance(v, bool) or not isinstance(v, (int, float, list)):
+        raise RigError(f"field {name}: not a number or an array of numbers")
+    try:
+        a = np.asarray(v, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise RigError(f"field {name}: not an array of numbers") from None
+    if a.shape != shape:
+        raise RigError(f"field {name}: must have shape {shape}, got {a.shape}")
+    if np.any(np.isinf(a)) or np.any(a[~np.isnan(a)] < 0):
+        raise RigError(f"field {name}: must be numbers >= 0 (NaN: not estimated)")
+    return np.nan_to_num(a, nan=0.0)
+
+
 def _std(cal: dict[str, Any], side: str, name: str) -> float:
-    """calibration.intrinsics_std.SIDE.NAME as a non-negative finite number (0 when absent)."""
+    """calibration.intrinsics_std.SIDE.NAME (px; 0 when absent or not estimated)."""
     block = cal.get("intrinsics_std", {})
     sub = block.get(side, {}) if isinstance(block, dict) else None
     if not isinstance(sub, dict):
         raise RigError(f"field calibration.intrinsics_std.{side}: must be an object")
-    v = sub.get(name, 0.0)
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
-        raise RigError(f"field calibration.intrinsics_std.{side}.{name}: must be a finite number >= 0, got {v!r}")
-    return float(v)
+    return float(_sigmas(sub, name, (), f"calibration.intrinsics_std.{side}"))
 
 
 def _rel(cal: dict[str, Any], side: str, name: str) -> float:
