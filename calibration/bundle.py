@@ -33,6 +33,12 @@ INTR_NAMES = ("fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3")
 RECENTRE_DEG = 60.0
 
 
+def intr_matrices(intr: F64) -> tuple[F64, F64]:
+    """(9,) intrinsics -> K (3, 3), dist (5,)."""
+    K = np.array([[intr[0], 0.0, intr[2]], [0.0, intr[1], intr[3]], [0.0, 0.0, 1.0]])
+    return K, intr[4:9].copy()
+
+
 def rodrigues(w: F64) -> F64:
     """Rotation matrices (V, 3, 3) from Rodrigues vectors (V, 3) in radians."""
     theta = np.linalg.norm(w, axis=1)
@@ -219,8 +225,6 @@ def far_disparity_std(lay: _Layout, x: F64, cov: F64, h: float = 1e-6) -> float:
     intrinsics and the extrinsics (forward differences) through their joint covariance: the marginal
     σ of the relative yaw alone overstates it many times, since a yaw and a shift of the right principal
     point move the right image alike and the adjustment tells only their sum well."""
-    from calibration.initial import intr_matrices  # initial.py imports this module
-
     n = lay.pose_at
     intr, R, _T, _ = lay.unpack(x)
     K_l = intr_matrices(intr[0])[0]
@@ -242,8 +246,6 @@ def far_disparity_std(lay: _Layout, x: F64, cov: F64, h: float = 1e-6) -> float:
 def _far_disparity(lay: _Layout, x: F64, u_l: F64, u_r: F64) -> float:
     """The angle (rad) between the rays of raw pixels u_l and u_r seen by the rig of parameters x, along
     the baseline: the disparity of a far point divided by the focal length."""
-    from calibration.initial import intr_matrices
-
     intr, R, T, _ = lay.unpack(x)
     (K_l, d_l), (K_r, d_r) = intr_matrices(intr[0]), intr_matrices(intr[1])
     m_l = np.r_[cv2.undistortPoints(u_l, K_l, d_l).reshape(2), 1.0]

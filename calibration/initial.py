@@ -7,7 +7,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from calibration.bundle import N_INTR, BAInput, BAResult, bundle_adjust, rodrigues
+from calibration.bundle import N_INTR, BAInput, BAResult, bundle_adjust, intr_matrices, rodrigues
 
 F64 = NDArray[np.float64]
 B = NDArray[np.bool_]
@@ -17,12 +17,6 @@ def intr_vector(K: F64, dist: F64) -> F64:
     """(3, 3) K and (5,) distortion -> (9,) fx fy cx cy k1 k2 p1 p2 k3."""
     out: F64 = np.r_[K[0, 0], K[1, 1], K[0, 2], K[1, 2], np.asarray(dist, dtype=np.float64)[:5]]
     return out
-
-
-def intr_matrices(intr: F64) -> tuple[F64, F64]:
-    """(9,) intrinsics -> K (3, 3), dist (5,)."""
-    K = np.array([[intr[0], 0.0, intr[2]], [0.0, intr[1], intr[3]], [0.0, 0.0, 1.0]])
-    return K, intr[4:9].copy()
 
 
 def solve_pose(obj: F64, pts: F64, intr: F64) -> F64:

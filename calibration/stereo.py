@@ -9,10 +9,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from calibration.board import BoardSpec
-from calibration.bundle import BAInput, BAResult, bundle_adjust, rodrigues
+from calibration.bundle import BAInput, BAResult, bundle_adjust, intr_matrices, rodrigues
 from calibration.errors import TooFewViewsError
 from calibration.evaluate import Rectification, coverage, rectify
-from calibration.initial import default_fixed, init_stereo, intr_matrices
+from calibration.initial import default_fixed, init_stereo
 from calibration.polynomial import PolynomialLens, fit_polynomial
 from tracker.geometry import Camera, StereoRig
 
