@@ -79,8 +79,8 @@ def test_a_principal_point_uncertainty_widens_the_angles(tmp_path: Path) -> None
 @pytest.mark.parametrize(("section", "message"), [
     ([1, 2], "field calibration: must be an object"),
     ({"T_std": [0.1, "x", 0]}, "field calibration.T_std: not an array of numbers"),
-    ({"T_std": [0.1, 0.2]}, "field calibration.T_std: must have shape"),
-    ({"disparity_offset_std_px": float("inf")}, "calibration.disparity_offset_std_px: must be numbers >= 0"),
+    ({"T_std": [0.1, 0.2]}, "field calibration.T_std: must be 3, got 2"),
+    ({"disparity_offset_std_px": float("inf")}, "calibration.disparity_offset_std_px: holds an infinite number"),
     ({"disparity_offset_std_px": -0.1}, "calibration.disparity_offset_std_px: must be numbers >= 0"),
     ({"intrinsics_std": {"left": {"fx": -1.0}}}, "calibration.intrinsics_std.left.fx: must be numbers >= 0"),
     ({"intrinsics_std": {"left": {"cx": "big"}}}, "calibration.intrinsics_std.left.cx: not a number"),

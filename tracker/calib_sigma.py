@@ -51,7 +51,7 @@ class CalibrationSigma:
         d_std = float(_sigmas(cal, "disparity_offset_std_px", ()))
         b = float(np.linalg.norm(T))
         sigma_b_rel = abs(float(T @ T_std)) / (b * b) if b > 0 else 0.0
-        f_rel = [_rel(cal, side, "fx") for side in ("left", "right")]
+        f_rel = [_focal_rel(cal, side) for side in ("left", "right")]
         cx, cy = _std(cal, "left", "cx"), _std(cal, "left", "cy")
         scale = math.sqrt(sigma_b_rel**2 + (f_rel[0] ** 2 + f_rel[1] ** 2) / 2.0)
         return CalibrationSigma(scale, d_std, (cx, cy))
@@ -61,18 +61,10 @@ def _sigmas(d: dict[str, Any], key: str, shape: tuple[int, ...], where: str = "c
     """Field `key` of `d`: standard deviations of `shape`, each a number >= 0 or NaN (not estimated: 0
     here); zeros when absent. RigError naming WHERE.KEY otherwise."""
     name = f"{where}.{key}"
-    if key not in d:
-        return np.zeros(shape)
-    v = d[key]
-    if isinstance(v, bool) or not isinstance(v, (int, float, list)):
+    if isinstance(d.get(key), (bool, str, dict)):
         raise RigError(f"field {name}: not a number or an array of numbers")
-    try:
-        a = np.asarray(v, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise RigError(f"field {name}: not an array of numbers") from None
-    if a.shape != shape:
-        raise RigError(f"field {name}: must have shape {shape}, got {a.shape}")
-    if np.any(np.isinf(a)) or np.any(a[~np.isnan(a)] < 0):
+    a = matrix_field(d, key, name, shape, np.zeros(shape), nan_ok=True)
+    if np.any(a[~np.isnan(a)] < 0):
         raise RigError(f"field {name}: must be numbers >= 0 (NaN: not estimated)")
     return np.nan_to_num(a, nan=0.0)
 
@@ -86,13 +78,12 @@ def _std(cal: dict[str, Any], side: str, name: str) -> float:
     return float(_sigmas(sub, name, (), f"calibration.intrinsics_std.{side}"))
 
 
-def _rel(cal: dict[str, Any], side: str, name: str) -> float:
-    """σ / value of a focal length: the std over the camera's own K (calibration.K_SIDE)."""
-    s = _std(cal, side, name)
+def _focal_rel(cal: dict[str, Any], side: str) -> float:
+    """σ_fx / fx of one camera, fx from its own K (calibration.K_SIDE)."""
+    s = _std(cal, side, "fx")
     if s == 0.0:
         return 0.0
-    K = matrix_field(cal, f"K_{side}", f"calibration.K_{side}", (3, 3))
-    f = float(K[0, 0] if name == "fx" else K[1, 1])
+    f = float(matrix_field(cal, f"K_{side}", f"calibration.K_{side}", (3, 3))[0, 0])
     if not f > 0:
         raise RigError(f"field calibration.K_{side}: focal length must be positive, got {f}")
     return s / f

@@ -44,7 +44,6 @@ class WindowOptions:
 _D = WindowOptions()
 
 
-
 def match_point(left: U8, right: U8, x: float, y: float, max_disparity: int, *, votes: int = 3,
                 tolerance: float = 0.5, shift: int = 4, **options: Any) -> float | None:
     """Disparity d (px) of the left point (x, y) in a rectified pair, right x = x - d; None if unreliable.

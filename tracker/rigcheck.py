@@ -25,8 +25,10 @@ class RigError(ValueError):
     """A rig field is malformed or implausible; the message names the field and is one line."""
 
 
-def matrix_field(d: dict[str, Any], key: str, name: str, shape: tuple[int, ...], default: Any = None) -> F64:
-    """Field `key` of `d` as a finite float64 array of exactly `shape`; RigError naming `name` otherwise."""
+def matrix_field(d: dict[str, Any], key: str, name: str, shape: tuple[int, ...], default: Any = None,
+                 nan_ok: bool = False) -> F64:
+    """Field `key` of `d` as a finite float64 array of exactly `shape`; RigError naming `name` otherwise.
+    nan_ok: NaN entries are kept (a figure that could not be estimated); infinities are still refused."""
     if key not in d:
         if default is None:
             raise RigError(f"field {name}: missing")
@@ -38,7 +40,9 @@ def matrix_field(d: dict[str, Any], key: str, name: str, shape: tuple[int, ...],
     if a.shape != shape:
         got = "x".join(str(n) for n in a.shape) or "a scalar"
         raise RigError(f"field {name}: must be {'x'.join(str(n) for n in shape)}, got {got}")
-    if not np.all(np.isfinite(a)):
+    if nan_ok and np.any(np.isinf(a)):
+        raise RigError(f"field {name}: holds an infinite number")
+    if not nan_ok and not np.all(np.isfinite(a)):
         raise RigError(f"field {name}: holds a non-finite number (NaN or infinity)")
     return a
 
