@@ -3,15 +3,17 @@ matching underneath).
 
 One window centred on a point near a depth edge straddles it and locks on one of the two surfaces: on the
 Middlebury pairs of ../shared/data/stereo-gt, 40 to 99 % of the single window's errors over 1 px were at
-points whose 11 x 11 window spans more than 2 px of true disparity, nearly all of them background points
-given the foreground's disparity. `match_point` matches nine windows, centred on the point and shifted by
-`shift` px along x, y and both (shiftable windows, Bobick and Intille 1999), along the row only (integer
-search, 1-D refinement, right-to-left check: cheap). It answers only when the centre window is among at
-least `votes` that agree within `tolerance` px and no window lies more than 1 px from them: near a depth
-edge some shifted windows see the other surface and disagree, so the point is left unanswered rather than
-given the wrong surface. The row offset of the right image (real rectifications leave a fraction of a
-pixel) comes from one 2-D fit (tracker.stereo_lk.refine_2d), and the answer is the mean of the agreeing
-windows' disparities refined along that row (their noise averages; a constant slant's cancels in pairs).
+points whose 11 x 11 window spans more than 2 px of true disparity, and of the five-window vote's errors
+over 1 px 73 to 100 % per pair were too large (background points given the foreground's disparity).
+`match_point` matches nine windows, centred on the point and shifted by `shift` px along x, y and both
+(shiftable windows, Bobick and Intille 1999), along the row only (integer search, 1-D refinement,
+right-to-left check: cheap). It answers only when the centre window is among a majority (`votes`) that agree
+within `tolerance` px and no window lies more than 1 px from them: near a depth edge some shifted windows
+see the other surface and disagree, so the point is left unanswered rather than given the wrong surface. The
+row offset of the right image (real rectifications leave a fraction of a pixel) comes from one 2-D fit
+(tracker.stereo_lk.refine_2d; the centre window's, or if that one is rejected the next agreeing window's),
+and the answer is the mean of the agreeing windows' disparities refined along that row (their noise
+averages, and on a slanted surface the offsets of two mirrored windows cancel when both agree).
 """
 
 from __future__ import annotations
@@ -54,19 +56,19 @@ SHIFTS = ((0, 0), (-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (1, 1), (1, -1), (
 ROW_FITS = 3  # agreeing windows tried, in turn, for the 2-D fit that gives the row offset
 
 
-def match_point(left: U8, right: U8, x: float, y: float, max_disparity: int, *, votes: int = 4,
+def match_point(left: U8, right: U8, x: float, y: float, max_disparity: int, *, votes: int = 5,
                 tolerance: float = 0.5, shift: int = 4, **options: Any) -> float | None:
     """Disparity d (px) of the left point (x, y) in a rectified pair, right x = x - d; None if unreliable.
 
     The windows: centred on (x, y) and shifted by `shift` px along x, y and both (SHIFTS), each matched
     by match_window's one-dimensional steps and rejections (`options`: its keyword arguments; max_sigma
     applies to the 1-D fit). The agreeing windows: those within `tolerance` px of the window the most
-    others are within `tolerance` of (the better score breaks ties). None unless they are at least `votes`,
-    include the centre window, and no other window lies more than 1 px from that one. The row offset dy
-    comes from the 2-D fit of the centre window, or if it is rejected (match_window's rules) of the next
-    best-scoring agreeing windows (ROW_FITS in all); the answer is the mean of the agreeing windows'
-    disparities refined along the row y + dy. Raises FrameError / ValueError (one-line message) for bad
-    arguments."""
+    others are within `tolerance` of (the better score breaks ties). None unless they are at least `votes`
+    (by default 5, a majority of the nine), include the centre window, and no other window lies more than
+    1 px from that one. The row offset dy comes from the 2-D fit of the centre window, or if it is
+    rejected (match_window's rules) of the next best-scoring agreeing windows (ROW_FITS in all); the
+    answer is the mean of the agreeing windows' disparities refined along the row y + dy. Raises
+    FrameError / ValueError (one-line message) for bad arguments."""
     if isinstance(votes, bool) or not isinstance(votes, int) or not 1 <= votes <= len(SHIFTS):
         raise ValueError(f"votes must be an integer in 1..{len(SHIFTS)}, got {votes!r}")
     opts = WindowOptions(**options)
