@@ -242,6 +242,21 @@ def test_the_agreeing_windows_are_the_largest_group_with_no_window_over_1_px_awa
     assert group([5.0, 5.2, 4.9], votes=3) == [5.0, 5.2, 4.9]
 
 
+def test_match_point_needs_the_centre_window_among_the_agreeing(monkeypatch: pytest.MonkeyPatch) -> None:
+    import tracker.point_match as pm
+
+    left, right = shifted_pair(6.3)
+    d = match_point(left, right, 100.0, 40.0, 32)
+    assert d is not None and abs(d - 6.3) < 0.03
+    real = pm._coarse
+
+    def no_centre(lf: np.ndarray, rt: np.ndarray, x: float, y: float, dmax: int, o: pm.WindowOptions):
+        return None if (x, y) == (100.0, 40.0) else real(lf, rt, x, y, dmax, o)
+
+    monkeypatch.setattr(pm, "_coarse", no_centre)
+    assert match_point(left, right, 100.0, 40.0, 32) is None  # the eight shifted windows still agree
+
+
 def test_match_point_beside_a_depth_edge_answers_the_own_surface_or_nothing() -> None:
     """Background points just right of a textured disc (d 12.4 in front of d 4.0): windows over the
     edge take the disc's disparity; the answer, when given, is the background's."""
