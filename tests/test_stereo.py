@@ -224,22 +224,52 @@ def test_middlebury_accuracy(name: str) -> None:
     assert np.mean(np.array(errors) > 1.0) < 0.1  # gross mismatches are rare
 
 
-def test_match_point_answers_with_the_window_most_others_agree_with(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_the_agreeing_windows_are_the_largest_group_with_no_window_over_1_px_away() -> None:
     import tracker.point_match as pm
 
-    img = np.zeros((40, 60), np.uint8)
+    def group(ds: list[float], votes: int = 4) -> list[float] | None:
+        z = np.zeros((3, 3), np.float32)
+        found = [pm._Coarse(z, z, 0, 0.0, 0, 0, 0, d, 0.01, 0.9 - 0.01 * i) for i, d in enumerate(ds)]
+        g = pm._agreeing(found, votes, 0.5)
+        return None if g is None else [c.d for c in g]
 
-    def answers(by_shift: dict[tuple[int, int], tuple[float, float] | None]) -> float | None:
-        def fake(_l: object, _r: object, x: float, y: float, _d: int, _o: object) -> tuple[float, float] | None:
-            return by_shift[(round(x) - 30, round(y) - 20)]
-        monkeypatch.setattr(pm, "_match_window", fake)
-        return pm.match_point(img, img, 30.0, 20.0, 16)
+    assert group([5.0, 5.2, 4.9, 5.3, 5.1]) == [5.0, 5.2, 4.9, 5.3, 5.1]
+    # most are within 0.5 px of 5.4 (four, itself included); 6.2 is outside that group but within 1 px
+    assert group([5.0, 5.4, 5.8, 6.2, 5.2]) == [5.0, 5.4, 5.8, 5.2]
+    # four agree, but one window 1.3 px away sees another surface: no answer
+    assert group([5.0, 5.2, 4.9, 5.3, 6.5]) is None
+    assert group([5.0, 5.2, 4.9]) is None  # fewer than `votes`
+    assert group([5.0, 5.2, 4.9], votes=3) == [5.0, 5.2, 4.9]
 
-    # the centre straddles an edge (d 3.0); three shifted windows lie on the point's surface (d near 8)
-    assert answers({(0, 0): (3.0, 0.99), (-4, 0): (8.1, 0.9), (4, 0): (7.9, 0.8), (0, -4): (8.0, 0.7),
-                    (0, 4): None}) == 8.1  # three agree; the best score of those with most support
-    # two against two and a miss: fewer than 3 agree, no answer
-    assert answers({(0, 0): (3.0, 0.99), (-4, 0): (3.2, 0.9), (4, 0): (8.0, 0.8), (0, -4): (8.1, 0.7),
-                    (0, 4): None}) is None
+
+def test_match_point_needs_the_centre_window_among_the_agreeing(monkeypatch: pytest.MonkeyPatch) -> None:
+    import tracker.point_match as pm
+
+    left, right = shifted_pair(6.3)
+    d = match_point(left, right, 100.0, 40.0, 32)
+    assert d is not None and abs(d - 6.3) < 0.03
+    real = pm._coarse
+
+    def no_centre(lf: np.ndarray, rt: np.ndarray, x: float, y: float, dmax: int, o: pm.WindowOptions):
+        return None if (x, y) == (100.0, 40.0) else real(lf, rt, x, y, dmax, o)
+
+    monkeypatch.setattr(pm, "_coarse", no_centre)
+    assert match_point(left, right, 100.0, 40.0, 32) is None  # the eight shifted windows still agree
+
+
+def test_match_point_beside_a_depth_edge_answers_the_own_surface_or_nothing() -> None:
+    """Background points just right of a textured disc (d 12.4 in front of d 4.0): windows over the
+    edge take the disc's disparity; the answer, when given, is the background's."""
+    left, right, disc = disc_scene(d_fg=12.4, d_bg=4.0)
+    answered = 0
+    for dx in (1, 2, 3, 5):
+        for a in np.linspace(-0.9, 0.9, 15):  # along the disc's right-hand rim, angle a
+            x, y = 120.0 + (25.0 + dx) * np.cos(a), 60.0 + (25.0 + dx) * np.sin(a)
+            assert not disc[round(y), round(x)]
+            d = match_point(left, right, float(x), float(y), 32)
+            if d is not None:
+                answered += 1
+                assert abs(d - 4.0) < 0.5, f"({x:.1f}, {y:.1f}): {d:.2f}"
+    assert answered >= 10
     with pytest.raises(ValueError, match="votes"):
-        pm.match_point(img, img, 30.0, 20.0, 16, votes=6)
+        match_point(left, right, 30.0, 20.0, 16, votes=10)
