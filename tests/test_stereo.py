@@ -229,7 +229,7 @@ def test_the_agreeing_windows_are_the_largest_group_with_no_window_over_1_px_awa
 
     def group(ds: list[float], votes: int = 4) -> list[float] | None:
         z = np.zeros((3, 3), np.float32)
-        found = [pm._Coarse(z, z, 0, 0.0, 0, 0, 0, d, 0.01, 0.9 - 0.01 * i) for i, d in enumerate(ds)]
+        found = [pm._Coarse(z, z, 0, 0.0, 0, 0, d, 0.01, 0.9 - 0.01 * i) for i, d in enumerate(ds)]
         g = pm._agreeing(found, votes, 0.5)
         return None if g is None else [c.d for c in g]
 

@@ -142,8 +142,8 @@ def _checked(left: U8, right: U8, x: float, y: float, max_disparity: int, window
 @dataclass(frozen=True, eq=False)
 class _Coarse:
     """One window after the one-dimensional steps: the template T (n, n) centred on the left (xc, y), its
-    support weights w, the right strip's first column xs0 and width ws, the search bound dmax (px), the
-    disparity d (px) and the refined correlation score."""
+    support weights w, the right strip's first column xs0 and width ws, the disparity d (px), its 1-sigma
+    (px) and the refined correlation score."""
 
     T: F32
     w: F32
@@ -151,15 +151,14 @@ class _Coarse:
     y: float
     xs0: int
     ws: int
-    dmax: int
     d: float
     sigma: float
     score: float
 
 
 def _coarse(left: U8, right: U8, x: float, y: float, max_disparity: int, o: WindowOptions) -> _Coarse | None:
-    """The window centred on (x, y): integer weighted-ZNCC search and 1-D refinement (match_strip), its
-    and the right-to-left check; None if rejected (see match_window)."""
+    """The window centred on (x, y): integer weighted-ZNCC search and 1-D refinement (match_strip), then
+    the right-to-left check; None if rejected (see match_window)."""
     H, W = left.shape
     h = o.window // 2
     xc = round(x)
@@ -182,7 +181,7 @@ def _coarse(left: U8, right: U8, x: float, y: float, max_disparity: int, o: Wind
         return None
     if not _lr_consistent(left, right, x, x - fit.d, y, h, max_disparity, o.lr_tolerance):
         return None
-    return _Coarse(T, w, xc, y, xs0, ws, dmax, fit.d, fit.sigma, fit.score)
+    return _Coarse(T, w, xc, y, xs0, ws, fit.d, fit.sigma, fit.score)
 
 
 def _agreeing(found: list[_Coarse], votes: int, tolerance: float) -> list[_Coarse] | None:
