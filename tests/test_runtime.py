@@ -10,6 +10,8 @@ import pytest
 
 from tmeye.runtime import Hub, Runtime, RuntimeConfig, ServoMode, ServoRequestError, TrackerTuning
 from tmeye.runtime.compose import ComposeError
+from tmeye.runtime.servo import ServoControl
+from tracker.aim import AimController
 from tracker.sim.scenarios import get_scenario
 
 
@@ -127,6 +129,22 @@ def test_servo_modes_goto_and_jog() -> None:
         assert rt.servo.mode is ServoMode.AUTO and rt.servo.goal is None
     finally:
         rt.stop()
+
+
+def test_a_jog_moves_rate_times_duration_and_repeated_jogs_keep_moving() -> None:
+    dt = 1 / 30
+    sc = ServoControl(AimController())
+    sc.goto(0.0, 0.0)
+    sc.jog(12.0, -6.0, 0.5)
+    for k in range(1, 40):
+        sc.tick(k * dt, dt)
+    assert sc.goal == pytest.approx((6.0, -3.0))  # 12 and -6 deg/s for 0.5 s
+    # a client repeating a short jog every frame (a gamepad polled each animation frame) moves at the rate
+    sc.goto(0.0, 0.0)
+    for k in range(40, 70):
+        sc.jog(20.0, 0.0, 0.6)
+        sc.tick(k * dt, dt)
+    assert sc.goal is not None and sc.goal[0] == pytest.approx(20.0)  # 30 frames at 20 deg/s
 
 
 def test_tuning_applies_from_the_next_frame_and_rejects_bad_fields() -> None:

@@ -82,8 +82,12 @@ class ServoControl:
         self.mode = ServoMode.MANUAL
 
     def jog(self, pan_dps: float, tilt_dps: float, duration_s: float) -> None:
-        sp = self.controller.setpoint
-        self._manual((sp.pan_deg, sp.tilt_deg))
+        """Move at these rates for duration_s from now. A jog that arrives while another runs replaces its
+        rates and end but goes on from the same goal, so a client that repeats short jogs (a held key, a
+        gamepad polled every animation frame) moves the mount smoothly, however often it repeats them."""
+        if self._jog is None or self.goal is None:
+            sp = self.controller.setpoint  # start from where the mount is commanded now
+            self._manual((sp.pan_deg, sp.tilt_deg))
         self._jog = Jog(pan_dps, tilt_dps, None, duration_s)
         self.mode = ServoMode.MANUAL
 
@@ -92,9 +96,8 @@ class ServoControl:
         jog = self._jog
         if jog is None or self.goal is None:
             return
-        if jog.until_t is None:
-            self._jog = jog = Jog(jog.pan_dps, jog.tilt_dps, t + jog.duration_s, jog.duration_s)
-            return
+        if jog.until_t is None:  # requested during the last frame interval: it runs from that interval's start
+            self._jog = jog = Jog(jog.pan_dps, jog.tilt_dps, t - dt + jog.duration_s, jog.duration_s)
         step = max(0.0, min(dt, jog.until_t - (t - dt)))
         pan_l, tilt_l = self.limits
         self._manual((pan_l.clamp(self.goal[0] + jog.pan_dps * step), tilt_l.clamp(self.goal[1] + jog.tilt_dps * step)))
