@@ -96,12 +96,14 @@ class ServoControl:
         jog = self._jog
         if jog is None or self.goal is None:
             return
-        if jog.until_t is None:  # requested during the last frame interval: it runs from that interval's start
-            self._jog = jog = Jog(jog.pan_dps, jog.tilt_dps, t - dt + jog.duration_s, jog.duration_s)
-        step = max(0.0, min(dt, jog.until_t - (t - dt)))
+        until = jog.until_t
+        if until is None:  # requested during the last frame interval: it runs from that interval's start
+            until = t - dt + jog.duration_s
+            self._jog = jog = Jog(jog.pan_dps, jog.tilt_dps, until, jog.duration_s)
+        step = max(0.0, min(dt, until - (t - dt)))
         pan_l, tilt_l = self.limits
         self._manual((pan_l.clamp(self.goal[0] + jog.pan_dps * step), tilt_l.clamp(self.goal[1] + jog.tilt_dps * step)))
-        if t >= jog.until_t:
+        if t >= until:
             self._jog = None
 
     def _manual(self, goal: tuple[float, float]) -> None:
