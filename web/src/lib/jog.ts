@@ -1,23 +1,29 @@
 // Jogging the mount from several inputs at once (arrow keys, the on-screen pad, a gamepad): each input
 // sets its own rate vector; while the sum is non-zero a jog request of a short duration is sent every
 // 250 ms (one request in flight at a time), and a zero-rate jog stops the mount when all are released.
+// A change of rate is sent at once, but no sooner than MIN_GAP_MS after the previous request (an analog
+// stick polled every animation frame changes a little each time); a stop is always sent at once.
 import { api, ApiError } from "../api/client";
 
 export type Vec = { pan: number; tilt: number };
+
+const MIN_GAP_MS = 100;
 
 export class JogController {
   private inputs = new Map<string, Vec>();
   private timer: number | undefined;
   private busy = false;
   private moving = false;
-  private pendingStop = false;
+  private lastSent = -Infinity;
 
   constructor(private readonly onError: (e: ApiError) => void, private readonly onSent?: (v: Vec) => void) {}
 
   set(source: string, v: Vec | null): void {
+    const before = this.sum();
     if (!v || (v.pan === 0 && v.tilt === 0)) this.inputs.delete(source);
     else this.inputs.set(source, v);
-    this.kick();
+    const after = this.sum();
+    if (after.pan !== before.pan || after.tilt !== before.tilt) this.kick();
   }
 
   get active(): boolean {
@@ -35,9 +41,12 @@ export class JogController {
   }
 
   private kick(): void {
-    if (this.busy) return;
+    if (this.busy) return; // the request in flight sends the new rates when it is answered
     window.clearTimeout(this.timer);
-    void this.send();
+    const v = this.sum();
+    const wait = v.pan === 0 && v.tilt === 0 ? 0 : this.lastSent + MIN_GAP_MS - performance.now();
+    if (wait <= 0) void this.send();
+    else this.timer = window.setTimeout(() => void this.send(), wait);
   }
 
   private async send(): Promise<void> {
@@ -45,6 +54,7 @@ export class JogController {
     const zero = v.pan === 0 && v.tilt === 0;
     if (zero && !this.moving) return;
     this.busy = true;
+    this.lastSent = performance.now();
     try {
       await api.jog({ pan_dps: v.pan, tilt_dps: v.tilt, duration_s: zero ? 0.05 : 0.6 });
       this.moving = !zero;
@@ -57,8 +67,8 @@ export class JogController {
       this.busy = false;
     }
     const now = this.sum();
-    if (now.pan !== 0 || now.tilt !== 0) this.timer = window.setTimeout(() => void this.send(), 250);
-    else if (this.moving || this.pendingStop) void this.send();
+    if (now.pan !== v.pan || now.tilt !== v.tilt) this.kick(); // changed while the request was in flight
+    else if (now.pan !== 0 || now.tilt !== 0) this.timer = window.setTimeout(() => void this.send(), 250);
   }
 
   /** A single short move (keyboard Enter/Space on a pad button). */
