@@ -85,6 +85,9 @@ class Status(BaseModel):
     skipped_frames: int
     frames_processed: int
     frame_errors: int
+    deferred_boxes: int = Field(0, description="candidate boxes the tracker put off to the next frame to keep a "
+                                               "busy frame within its time budget (setting verify_budget_ms), "
+                                               "since the start")
     source_faults: int = Field(0, description="source faults (a read that failed or stalled) since the start")
     source: dict[str, Any]
     servo: ServoStatus

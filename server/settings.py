@@ -31,6 +31,11 @@ class Settings(BaseSettings):
                                                 "(maestro:/dev/ttyACM0, ascii:/dev/ttyUSB0); default: sim with "
                                                 "the simulated source, none with a real one")
     realtime: bool = Field(True, description="pace the tracker at the source's frame rate")
+    verify_budget_ms: float = Field(4.0, ge=0, le=1000, description="real time: candidate boxes that hold no "
+                                    "track's prediction are verified only while the frame's tracker step is younger "
+                                    "than this (ms); the rest wait for the next frame, where they come first, and "
+                                    "are counted in the status (deferred_boxes). Bounds a busy frame's latency; "
+                                    "0: no bound")
     token_ttl_s: int = Field(12 * 3600, ge=5, le=30 * 86400, description="absolute session lifetime (s): a login "
                                                                        "ends this long after it was made")
     session_idle_s: int = Field(30 * 60, ge=2, le=30 * 86400, description="idle session timeout (s): a session "

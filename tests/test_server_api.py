@@ -233,6 +233,7 @@ def test_status_telemetry_and_tracks(server: Server) -> None:
         st = c.get("/api/status").json()
         assert st["state"] == "running" and st["source"]["scenario"] == "endless" and st["servo"]["mode"]
         assert set(st) >= {"frame", "fps", "skipped_frames", "source", "servo", "faults"}
+        assert isinstance(st["deferred_boxes"], int) and st["deferred_boxes"] >= 0
         tm = c.get("/api/telemetry/latest").json()
         assert tm["frame"] >= st["frame"] and abs(tm["captured_at"] - time.time()) < 5.0
         deadline = time.monotonic() + 30

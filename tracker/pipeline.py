@@ -21,6 +21,7 @@ from tracker.frames import StereoFrame
 from tracker.geometry import StereoRig
 from tracker.localize import Localization, Localizer
 from tracker.rectify import Rectifier
+from tracker.schedule import VerifySchedule
 from tracker.temporal import TemporalConfig, TemporalDetector
 from tracker.tracks import MultiTracker, TrackerConfig
 from tracker.verify import Blob, Verifier
@@ -42,7 +43,8 @@ class Detection:
 @dataclass(frozen=True)
 class FrameResult:
     """Everything the pipeline knows after a frame. primary: the primary target's detection this frame,
-    None if it was not seen. stage_ms: time per stage (milliseconds)."""
+    None if it was not seen. stage_ms: time per stage (milliseconds). deferred_boxes: candidate boxes put
+    off to the next frame by the frame's time budget (tracker.schedule)."""
 
     index: int
     t: float
@@ -50,6 +52,7 @@ class FrameResult:
     primary_id: int | None
     primary: Detection | None
     stage_ms: dict[str, float] = field(default_factory=dict)
+    deferred_boxes: int = 0
 
     def foreground_mask(self, shape: tuple[int, int]) -> NDArray[np.bool_]:
         """The full-resolution left foreground mask of all verified objects, (H, W) bool."""
@@ -61,7 +64,10 @@ class Pipeline:
 
     def __init__(self, rig: StereoRig, detector: DetectorConfig | None = None,
                  tracker: TrackerConfig | None = None, origin: F64 | None = None,
-                 temporal: TemporalConfig | None = None):
+                 temporal: TemporalConfig | None = None, verify_budget_ms: float | None = None):
+        """verify_budget_ms: in real time, candidate boxes that hold no track's prediction are verified only
+        while the frame's step is younger than this (ms); the others wait for the next frame (None: all are
+        verified, as offline evaluation needs for repeatable results)."""
         self.rig = rig
         self.rect = Rectifier(rig)
         self.bg = BackgroundDepth(self.rect, near_m=(detector or DetectorConfig()).near_m)
@@ -70,6 +76,7 @@ class Pipeline:
         self.temporal = TemporalDetector(self.subtractor, self.verifier, temporal)
         self.localizer = Localizer(self.rect, origin)
         self.tracker = MultiTracker(tracker)
+        self.schedule = VerifySchedule(verify_budget_ms)
         self._last_gain = 1.0
         self.learner: StreamLearner | None = None
 
@@ -113,7 +120,7 @@ class Pipeline:
         t1 = time.perf_counter()
         hints = self.tracker.predictions(frame.t)
         boxes = cands.worth_verifying(self.subtractor.cfg.moving_min_cells, hints)
-        blobs = [b for box in boxes for b in self.verifier.verify_all(frame, box, hints)]
+        blobs, deferred = self.schedule.run(boxes, hints, lambda box: self.verifier.verify_all(frame, box, hints), t0)
         blobs = self.temporal.detect(frame, blobs, hints)  # cameras still: objects too near their background
         t2 = time.perf_counter()
         locs = [self.localizer.locate(b.centroid_rect, b.disparity, b.disparity_sigma, b.area, frame.gimbal)
@@ -136,7 +143,7 @@ class Pipeline:
         dets = tuple(Detection(b, loc, i) for b, loc, i in zip(blobs, locs, ids, strict=True))
         pid = self.tracker.primary_id
         primary = next((d for d in dets if d.track_id == pid), None)
-        return FrameResult(frame.index, frame.t, dets, pid, primary, ms)
+        return FrameResult(frame.index, frame.t, dets, pid, primary, ms, deferred)
 
     def _foreground_low(self, blobs: list[Blob]) -> NDArray[np.uint8] | None:
         if not blobs:

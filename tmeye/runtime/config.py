@@ -22,7 +22,9 @@ class RuntimeConfig:
     from its angles) or a driver URL (maestro:/dev/ttyACM0, ascii:/dev/ttyUSB0). realtime: pace the
     worker at the source's frame rate (frames that could not be processed in time are skipped and
     counted); otherwise run as fast as possible. max_frames: stop after this many processed frames.
-    origin: (X, Y, Z) m, the point about which r, θ, φ are given. baseline_limits_m: the plausible
+    origin: (X, Y, Z) m, the point about which r, θ, φ are given. verify_budget_ms: with realtime, the
+    tracker step's time budget for candidate boxes that hold no track's prediction (None: no bound; see
+    tracker.schedule). baseline_limits_m: the plausible
     baselines (m) a rig file is checked against (default tracker.rigcheck.BASELINE_LIMITS_M, 1 cm to 10 m)."""
 
     source: str = "sim"
@@ -34,6 +36,7 @@ class RuntimeConfig:
     realtime: bool = True
     loop_source: bool = True
     max_frames: int | None = None
+    verify_budget_ms: float | None = None
     origin: tuple[float, float, float] = (0.0, 0.0, 0.0)
     baseline_limits_m: tuple[float, float] | None = None
     start: float | None = None

@@ -93,6 +93,7 @@ class Runtime:
         self.state = "created"
         self.error: str | None = None
         self.frames = self.skipped = self.frame_errors = 0
+        self.deferred_boxes = 0  # candidate boxes put off to the next frame by the time budget
         self.fps = 0.0
         self.comp: Composition | None = None
         self.servo: ServoControl | None = None
@@ -208,6 +209,7 @@ class Runtime:
         servo = ev.servo.as_dict() if ev is not None and ev.servo is not None else None
         return {"state": self.state, "frame": ev.frame_no if ev else None, "fps": round(self.fps, 2),
                 "frames_processed": self.frames, "skipped_frames": self.skipped, "frame_errors": self.frame_errors,
+                "deferred_boxes": self.deferred_boxes,
                 "source_faults": self.source_health.faults,
                 "source": describe_source(self.comp) if self.comp else {"kind": self.config.source},
                 "servo": servo, "subscribers": self.hub.subscribers, "subscriptions": self.hub.stats(),
@@ -295,6 +297,7 @@ class Runtime:
             self.fps = rate if self.fps == 0 else 0.9 * self.fps + 0.1 * rate
         self._last_done = now
         self.frames += 1
+        self.deferred_boxes += res.deferred_boxes
         servo = self._servo_state(step)
         frame_no = self._base + frame.index
         tm = telemetry(res, frame, self.fps, frame_no)
