@@ -31,7 +31,7 @@ class Settings(BaseSettings):
                                                 "(maestro:/dev/ttyACM0, ascii:/dev/ttyUSB0); default: sim with "
                                                 "the simulated source, none with a real one")
     realtime: bool = Field(True, description="pace the tracker at the source's frame rate")
-    verify_budget_ms: float = Field(4.0, ge=0, le=1000, description="real time: candidate boxes that hold no "
+    verify_budget_ms: float = Field(2.0, ge=0, le=1000, description="real time: candidate boxes that hold no "
                                     "track's prediction are verified only while the frame's tracker step is younger "
                                     "than this (ms); the rest wait for the next frame, where they come first, and "
                                     "are counted in the status (deferred_boxes). Bounds a busy frame's latency; "
