@@ -2100,6 +2100,12 @@ export interface components {
             /** Frame Errors */
             frame_errors: number;
             /**
+             * Deferred Boxes
+             * @description candidate boxes the tracker put off to the next frame to keep a busy frame within its time budget (setting verify_budget_ms), since the start
+             * @default 0
+             */
+            deferred_boxes: number;
+            /**
              * Source Faults
              * @description source faults (a read that failed or stalled) since the start
              * @default 0
