@@ -107,6 +107,11 @@ class _PoseMaps:
     full: dict[int, _LazyMap] = field(default_factory=dict)
 
 
+def holds_prediction(box: Box, hints: NDArray[np.float64] | None) -> bool:
+    """Whether a predicted track position (x, y) (raw left pixels; hints (N, 2+)) lies inside the box."""
+    return hints is not None and any(box[0] <= h[0] < box[2] and box[1] <= h[1] < box[3] for h in hints)
+
+
 @dataclass(frozen=True)
 class Candidates:
     """Candidate boxes (raw left pixels, x0 y0 x1 y1), the number of stride cells above the threshold in
@@ -120,12 +125,10 @@ class Candidates:
     def worth_verifying(self, min_cells: int, hints: NDArray[np.float64] | None) -> tuple[Box, ...]:
         """The boxes to verify: all of them with the cameras still; while they move, those with at least
         min_cells cells or with a predicted track position (x, y) inside."""
-        def tracked(b: Box) -> bool:
-            return hints is not None and any(b[0] <= h[0] < b[2] and b[1] <= h[1] < b[3] for h in hints)
-
         if not self.moving:
             return self.boxes
-        return tuple(b for b, n in zip(self.boxes, self.cells, strict=True) if n >= min_cells or tracked(b))
+        return tuple(b for b, n in zip(self.boxes, self.cells, strict=True)
+                     if n >= min_cells or holds_prediction(b, hints))
 
 
 class StereoSubtractor:

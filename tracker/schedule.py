@@ -19,13 +19,9 @@ from typing import TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
-Box = tuple[int, int, int, int]  # x0, y0, x1, y1 (px, left image, end exclusive)
+from tracker.detect import Box, holds_prediction
+
 T = TypeVar("T")
-
-
-def _holds(box: Box, hints: NDArray[np.float64] | None) -> bool:
-    """Whether a predicted track position (x, y) (raw left pixels) lies inside the box."""
-    return hints is not None and any(box[0] <= h[0] < box[2] and box[1] <= h[1] < box[3] for h in hints)
 
 
 def _overlaps(a: Box, b: Box) -> bool:
@@ -39,15 +35,14 @@ class VerifySchedule:
         self.budget_ms = budget_ms
         self.clock = clock
         self._put_off: tuple[Box, ...] = ()
-        self.deferred_total = 0  # boxes put off since the start
 
-    def order(self, boxes: Sequence[Box], hints: NDArray[np.float64] | None) -> list[int]:
-        """Indices of boxes in the order to verify them: holding a prediction, put off last frame, then
-        larger first (stable otherwise)."""
+    def _order(self, boxes: Sequence[Box], held: list[bool]) -> list[int]:
+        """Indices of boxes in the order to verify them: holding a prediction (held), put off last frame,
+        then larger first (stable otherwise)."""
         def key(i: int) -> tuple[int, int, int]:
             b = boxes[i]
             put_off = any(_overlaps(b, p) for p in self._put_off)
-            return (0 if _holds(b, hints) else 1, 0 if put_off else 1, -(b[2] - b[0]) * (b[3] - b[1]))
+            return (0 if held[i] else 1, 0 if put_off else 1, -(b[2] - b[0]) * (b[3] - b[1]))
         return sorted(range(len(boxes)), key=key)
 
     def run(self, boxes: Sequence[Box], hints: NDArray[np.float64] | None, verify: Callable[[Box], list[T]],
@@ -61,14 +56,14 @@ class VerifySchedule:
         done: dict[int, list[T]] = {}
         put_off: list[Box] = []
         untracked = 0
-        for i in self.order(boxes, hints):
+        held = [holds_prediction(b, hints) for b in boxes]
+        for i in self._order(boxes, held):
             b = boxes[i]
-            if not _holds(b, hints):
+            if not held[i]:
                 if untracked and self.clock() > deadline:
                     put_off.append(b)
                     continue
                 untracked += 1
             done[i] = verify(b)
         self._put_off = tuple(put_off)
-        self.deferred_total += len(put_off)
         return [r for i in range(len(boxes)) for r in done.get(i, [])], len(put_off)
