@@ -10,7 +10,8 @@ import numpy as np
 from tracker.frames import StereoFrame
 from tracker.pipeline import Pipeline
 from tracker.sim.scenarios import SimRig, get_scenario, near_wall_scenario
-from tracker.temporal import TemporalConfig, texture_corr
+from tracker.temporal import TemporalConfig, texture_corr, without_duplicates
+from tracker.verify import Blob
 
 
 def _run(sim: SimRig, pipe: Pipeline, frames: int) -> tuple[int, int, list[float]]:
@@ -96,3 +97,36 @@ def test_existing_scenario_walk_keeps_its_figures() -> None:
     pipe.learn_background(sim.background())
     visible, found, errors = _run(sim, pipe, 60)
     assert found >= visible - 1 and max(abs(e) for e in errors) < 0.2
+
+
+def _blob(box: tuple[int, int, int, int], mask: np.ndarray) -> Blob:
+    c = np.zeros(2)
+    return Blob(box, mask, int(mask.sum()), c, c, 10.0, 0.1, 9.0, 1.0)
+
+
+def test_a_blob_mostly_inside_a_larger_one_is_the_same_object() -> None:
+    big = _blob((0, 0, 40, 80), np.ones((80, 40), bool))
+    inside = _blob((25, 20, 45, 40), np.ones((20, 20), bool))  # 300 of its 400 pixels are big's
+    apart = _blob((100, 0, 120, 20), np.ones((20, 20), bool))
+    edge = _blob((35, 0, 55, 20), np.ones((20, 20), bool))  # 100 of them are
+    assert [b.box for b in without_duplicates([inside, big, apart, edge])] == [big.box, apart.box, edge.box]
+    half = _blob((30, 20, 50, 40), np.ones((20, 20), bool))  # exactly half: kept
+    assert len(without_duplicates([big, half])) == 2
+
+
+def test_a_person_05_m_before_a_wall_is_one_object_where_it_turns() -> None:
+    # the stereo stages see parts of it and verify them again from overlapping boxes: one detection
+    sc = near_wall_scenario(0.5, frames=135)
+    sim = SimRig(sc)
+    pipe = Pipeline(sim.rig)
+    pipe.learn_background(sim.background())
+    counts = []
+    for _ in range(sc.frames):
+        sf = sim.step()
+        res = pipe.step(sf.frame)
+        ids = sf.truth.ids_left
+        counts.append(sum(
+            np.mean(ids[d.blob.box[1]:d.blob.box[3], d.blob.box[0]:d.blob.box[2]][d.blob.mask] == 1) > 0.5
+            for d in res.detections))
+    assert sum(c > 0 for c in counts) >= 40  # it enters 3 s in and turns 4.5 s in
+    assert max(counts) == 1

@@ -22,7 +22,7 @@ from tracker.geometry import StereoRig
 from tracker.localize import Localization, Localizer
 from tracker.rectify import Rectifier
 from tracker.schedule import VerifySchedule
-from tracker.temporal import TemporalConfig, TemporalDetector
+from tracker.temporal import TemporalConfig, TemporalDetector, without_duplicates
 from tracker.tracks import MultiTracker, TrackerConfig
 from tracker.verify import Blob, Verifier
 
@@ -121,6 +121,7 @@ class Pipeline:
         hints = self.tracker.predictions(frame.t)
         boxes = cands.worth_verifying(self.subtractor.cfg.moving_min_cells, hints)
         blobs, deferred = self.schedule.run(boxes, hints, lambda box: self.verifier.verify_all(frame, box, hints), t0)
+        blobs = without_duplicates(blobs)  # one object verified again from an overlapping box
         blobs = self.temporal.detect(frame, blobs, hints)  # cameras still: objects too near their background
         t2 = time.perf_counter()
         locs = [self.localizer.locate(b.centroid_rect, b.disparity, b.disparity_sigma, b.area, frame.gimbal)

@@ -116,6 +116,36 @@ def _overlap(a: Box, b: Box) -> bool:
     return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
 
 
+def _shared(a: Blob, b: Blob) -> int:
+    """How many pixels the masks of two blobs share (raw left image)."""
+    x0, y0, x1, y1 = max(a.box[0], b.box[0]), max(a.box[1], b.box[1]), min(a.box[2], b.box[2]), min(a.box[3], b.box[3])
+    if x0 >= x1 or y0 >= y1:
+        return 0
+    ma = a.mask[y0 - a.box[1]:y1 - a.box[1], x0 - a.box[0]:x1 - a.box[0]]
+    mb = b.mask[y0 - b.box[1]:y1 - b.box[1], x0 - b.box[0]:x1 - b.box[0]]
+    return int(np.count_nonzero(ma & mb))
+
+
+def without_duplicates(blobs: list[Blob]) -> list[Blob]:
+    """The blobs less those with more than half of their pixels inside the mask of a larger one: one
+    object verified again from an overlapping candidate box (two objects do not share pixels)."""
+    kept: list[Blob] = []
+    for b in sorted(blobs, key=lambda b: -b.area):
+        if not any(2 * _shared(b, k) > b.area for k in kept):
+            kept.append(b)
+    return [b for b in blobs if any(b is k for k in kept)]
+
+
+def _union_area(blobs: list[Blob]) -> int:
+    """The number of pixels in the union of the blobs' masks."""
+    x0, y0 = min(b.box[0] for b in blobs), min(b.box[1] for b in blobs)
+    x1, y1 = max(b.box[2] for b in blobs), max(b.box[3] for b in blobs)
+    canvas = np.zeros((y1 - y0, x1 - x0), bool)
+    for b in blobs:
+        canvas[b.box[1] - y0:b.box[3] - y0, b.box[0] - x0:b.box[2] - x0] |= b.mask
+    return int(np.count_nonzero(canvas))
+
+
 def _without_rims(blobs: list[Blob]) -> list[Blob]:
     """The blobs less those under a tenth of the area of a blob whose box overlaps theirs: the rim left
     around an object (the verifier's rule for a second object in one box, applied to the outlines)."""
@@ -157,7 +187,7 @@ class TemporalDetector:
             if covered and not all(self._near_background(b) for b in covered):
                 continue  # objects well clear of their background: their stereo outline holds
             blob = self.verify(frame, box, bg, dev, g, hints)
-            if blob is None or (covered and blob.area <= sum(b.area for b in covered)):
+            if blob is None or (covered and blob.area <= _union_area(covered)):
                 continue
             out = [b for b in out if all(b is not c for c in covered)] + [blob]
         return _without_rims(out)
