@@ -287,6 +287,23 @@ def test_match_point_needs_the_centre_window_among_the_agreeing(monkeypatch: pyt
     assert match_point(left, right, 100.0, 40.0, 32) is None  # the eight shifted windows still agree
 
 
+def test_match_point_lets_the_vote_settle_a_centre_peak_that_is_not_unique(monkeypatch: pytest.MonkeyPatch
+                                                                           ) -> None:
+    import tracker.point_match as pm
+
+    left, right = shifted_pair(6.3)
+    real = pm._coarse
+
+    def centre_ambiguous(lf: np.ndarray, rt: np.ndarray, x: float, y: float, dmax: int, o: pm.WindowOptions):
+        if (x, y) == (100.0, 40.0) and o.uniqueness > 0.0:
+            return None  # as if a second peak came within `uniqueness` of the best
+        return real(lf, rt, x, y, dmax, o)
+
+    monkeypatch.setattr(pm, "_coarse", centre_ambiguous)
+    d = match_point(left, right, 100.0, 40.0, 32)
+    assert d is not None and abs(d - 6.3) < 0.03
+
+
 def test_match_point_beside_a_depth_edge_answers_the_own_surface_or_nothing() -> None:
     """Background points just right of a textured disc (d 12.4 in front of d 4.0): windows over the
     edge take the disc's disparity; the answer, when given, is the background's."""
