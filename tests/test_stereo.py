@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from tracker.frames import FrameError
-from tracker.point_match import match_point
+from tracker.point_match import match_point, match_window
 from tracker.stereo import RegionMatch, match_region
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
@@ -77,6 +77,36 @@ def test_repetitive_texture_is_ambiguous() -> None:
     noise = np.random.default_rng(0).integers(0, 3, stripes.shape).astype(np.uint8)
     img = stripes + noise
     assert match_point(img, np.roll(img, -3, axis=1), 100.0, 30.0, 40) is None
+
+
+def claimed_block_pair(claimed: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Unrelated left and right textures, except a 25 px wide left block at x 108..132 that shows the right
+    image's block 6 px to its left (disparity 6) under grey-level noise. claimed: a second, noise-free copy
+    of that right block also lies in the left image, at disparity 31 (x 133..157)."""
+    H, W = 80, 200
+    right = smooth_texture((H, W), 1.5, 3)
+    left = smooth_texture((H, W), 1.5, 4)
+    right, left = right / right.std(), left / left.std()
+    block = right[:, 102:127]
+    left[:, 108:133] = block + 0.35 * np.random.default_rng(5).standard_normal(block.shape)
+    if claimed:
+        left[:, 133:158] = block
+    return to_u8(left), to_u8(right)
+
+
+def test_a_match_that_another_left_window_fits_better_is_rejected() -> None:
+    """The right-to-left check: the right window a left window matches (at disparity 6) is matched better,
+    searching back along the left row, by the left image's exact copy 25 px further right, so neither
+    match_window nor match_point answers there; without that copy both answer 6."""
+    points = [(120.0 + dx, 40.0 + dy) for dx in (-2, 0, 2) for dy in (-4, 0, 4)]
+    left, right = claimed_block_pair(claimed=False)
+    windows = [match_window(left, right, x, y, 40) for x, y in points]
+    answers = [match_point(left, right, x, y, 40) for x, y in points]
+    assert sum(w is not None and abs(w[0] - 6.0) < 0.3 for w in windows) >= 7
+    assert sum(d is not None and abs(d - 6.0) < 0.3 for d in answers) >= 7
+    left, right = claimed_block_pair(claimed=True)
+    assert all(match_window(left, right, x, y, 40) is None for x, y in points)
+    assert all(match_point(left, right, x, y, 40) is None for x, y in points)
 
 
 def test_points_outside_or_at_the_border() -> None:
@@ -255,6 +285,23 @@ def test_match_point_needs_the_centre_window_among_the_agreeing(monkeypatch: pyt
 
     monkeypatch.setattr(pm, "_coarse", no_centre)
     assert match_point(left, right, 100.0, 40.0, 32) is None  # the eight shifted windows still agree
+
+
+def test_match_point_lets_the_vote_settle_a_centre_peak_that_is_not_unique(monkeypatch: pytest.MonkeyPatch
+                                                                           ) -> None:
+    import tracker.point_match as pm
+
+    left, right = shifted_pair(6.3)
+    real = pm._coarse
+
+    def centre_ambiguous(lf: np.ndarray, rt: np.ndarray, x: float, y: float, dmax: int, o: pm.WindowOptions):
+        if (x, y) == (100.0, 40.0) and o.uniqueness > 0.0:
+            return None  # as if a second peak came within `uniqueness` of the best
+        return real(lf, rt, x, y, dmax, o)
+
+    monkeypatch.setattr(pm, "_coarse", centre_ambiguous)
+    d = match_point(left, right, 100.0, 40.0, 32)
+    assert d is not None and abs(d - 6.3) < 0.03
 
 
 def test_match_point_beside_a_depth_edge_answers_the_own_surface_or_nothing() -> None:

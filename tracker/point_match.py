@@ -9,7 +9,8 @@ over 1 px 73 to 100 % per pair were too large (background points given the foreg
 (shiftable windows, Bobick and Intille 1999), along the row only (integer search, 1-D refinement,
 right-to-left check: cheap). It answers only when the centre window is among a majority (`votes`) that agree
 within `tolerance` px and no window lies more than 1 px from them: near a depth edge some shifted windows
-see the other surface and disagree, so the point is left unanswered rather than given the wrong surface. The
+see the other surface and disagree, so the point is left unanswered rather than given the wrong surface. A centre
+window whose correlation peak is not unique takes part with its best peak (the vote settles it). The
 row offset of the right image (real rectifications leave a fraction of a pixel) comes from one 2-D fit
 (tracker.stereo_lk.refine_2d; the centre window's, or if that one is rejected the next agreeing window's),
 and the answer is the mean of the agreeing windows' disparities refined along that row (their noise
@@ -19,7 +20,7 @@ averages, and on a slanted surface the offsets of two mirrored windows cancel wh
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import cv2
@@ -54,6 +55,7 @@ _D = WindowOptions()
 # and the four diagonal ones.
 SHIFTS = ((0, 0), (-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (1, 1), (1, -1), (-1, 1))
 ROW_FITS = 3  # agreeing windows tried, in turn, for the 2-D fit that gives the row offset
+NO_UNIQUENESS = -2.0  # a uniqueness margin no correlation peak can fail (scores lie in [-1, 1])
 
 
 def match_point(left: U8, right: U8, x: float, y: float, max_disparity: int, *, votes: int = 5,
@@ -65,15 +67,18 @@ def match_point(left: U8, right: U8, x: float, y: float, max_disparity: int, *, 
     applies to the 1-D fit). The agreeing windows: those within `tolerance` px of the window the most
     others are within `tolerance` of (the better score breaks ties). None unless they are at least `votes`
     (by default 5, a majority of the nine), include the centre window, and no other window lies more than
-    1 px from that one. The row offset dy comes from the 2-D fit of the centre window, or if it is
-    rejected (match_window's rules) of the next best-scoring agreeing windows (ROW_FITS in all); the
-    answer is the mean of the agreeing windows' disparities refined along the row y + dy. Raises
-    FrameError / ValueError (one-line message) for bad arguments."""
+    1 px from that one. The centre window alone is matched again without the uniqueness test if it failed a
+    rule (its best peak must then agree with the others). The row offset dy comes from the 2-D fit of the
+    centre window, or if it is rejected (match_window's rules) of the next best-scoring agreeing windows
+    (ROW_FITS in all); the answer is the mean of the agreeing windows' disparities refined along the row
+    y + dy. Raises FrameError / ValueError (one-line message) for bad arguments."""
     if isinstance(votes, bool) or not isinstance(votes, int) or not 1 <= votes <= len(SHIFTS):
         raise ValueError(f"votes must be an integer in 1..{len(SHIFTS)}, got {votes!r}")
     opts = WindowOptions(**options)
     left, right, x, y = _checked(left, right, x, y, max_disparity, opts.window)
     cands = [_coarse(left, right, x + shift * dx, y + shift * dy, max_disparity, opts) for dx, dy in SHIFTS]
+    if cands[0] is None:  # the centre's best peak, if only a second one came close: the vote decides
+        cands[0] = _coarse(left, right, x, y, max_disparity, replace(opts, uniqueness=NO_UNIQUENESS))
     found = [c for c in cands if c is not None and c.sigma <= opts.max_sigma]
     group = _agreeing(found, votes, tolerance)
     if group is None or cands[0] not in group:
