@@ -74,14 +74,17 @@ class Localizer:
         self.centroid_sigma_px = centroid_sigma_px
 
     def locate(self, centroid_rect: F64, disparity: float, disparity_sigma: float, area: int,
-               gimbal: GimbalState | None) -> Localization:
+               gimbal: GimbalState | None, extra_px: tuple[float, float] = (0.0, 0.0)) -> Localization:
+        """extra_px: the centroid's further 1-σ (px) along x and y, where the target is seen only in part
+        (tracker.visibility)."""
         x, y = float(centroid_rect[0]), float(centroid_rect[1])
         X_rig = self.rect.rect_to_rig(x, y, disparity)  # eq. (2)
         J = self.rect.rig_to_rect_jacobian(x, y, disparity)
         s_c = max(self.centroid_sigma_px, 0.5 / np.sqrt(max(area, 1)))
         cal = self.rect.rig.sigma  # the calibration's own uncertainty (tracker.calib_sigma)
         (s_cx, s_cy), s_dcal = cal.principal_px, cal.disparity_px * self.rect.f / float(self.rect.rig.left.K[0, 0])
-        S = np.diag([s_c**2 + s_cx**2, s_c**2 + s_cy**2, max(disparity_sigma, 0.02) ** 2 + s_dcal**2])
+        S = np.diag([s_c**2 + s_cx**2 + extra_px[0] ** 2, s_c**2 + s_cy**2 + extra_px[1] ** 2,
+                     max(disparity_sigma, 0.02) ** 2 + s_dcal**2])
         cov_rig = J @ S @ J.T + cal.scale_rel**2 * np.outer(X_rig, X_rig)  # f·b off by ε: X -> (1 + ε) X
         g = gimbal or GimbalState()
         R_wr = gimbal_rotation(g.pan_deg, g.tilt_deg)

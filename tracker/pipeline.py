@@ -25,6 +25,7 @@ from tracker.schedule import VerifySchedule
 from tracker.temporal import TemporalConfig, TemporalDetector, without_duplicates
 from tracker.tracks import MultiTracker, TrackerConfig
 from tracker.verify import Blob, Verifier
+from tracker.visibility import VisibilityConfig, cut_sides, extra_sigma_px
 
 F64 = NDArray[np.float64]
 STAGES = ("candidates", "verify", "localize", "track")
@@ -77,6 +78,7 @@ class Pipeline:
         self.localizer = Localizer(self.rect, origin)
         self.tracker = MultiTracker(tracker)
         self.schedule = VerifySchedule(verify_budget_ms)
+        self.visibility = VisibilityConfig()
         self._last_gain = 1.0
         self.learner: StreamLearner | None = None
 
@@ -124,8 +126,8 @@ class Pipeline:
         blobs = without_duplicates(blobs)  # one object verified again from an overlapping box
         blobs = self.temporal.detect(frame, blobs, hints)  # cameras still: objects too near their background
         t2 = time.perf_counter()
-        locs = [self.localizer.locate(b.centroid_rect, b.disparity, b.disparity_sigma, b.area, frame.gimbal)
-                for b in blobs]
+        locs = [self.localizer.locate(b.centroid_rect, b.disparity, b.disparity_sigma, b.area, frame.gimbal,
+                                      self._partly_seen(frame, b)) for b in blobs]
         t3 = time.perf_counter()
         obs = np.array([[b.centroid_raw[0], b.centroid_raw[1], b.disparity] for b in blobs]).reshape(-1, 3)
         ids = self.tracker.update(frame.t, obs)
@@ -145,6 +147,14 @@ class Pipeline:
         pid = self.tracker.primary_id
         primary = next((d for d in dets if d.track_id == pid), None)
         return FrameResult(frame.index, frame.t, dets, pid, primary, ms, deferred)
+
+    def _partly_seen(self, frame: StereoFrame, b: Blob) -> tuple[float, float]:
+        """The centroid's extra 1-σ (px, x and y) where the blob is cut by the image border or, while the
+        cameras are still (its correspondence map is kept), by a nearer background (tracker.visibility)."""
+        cm = None if self.subtractor.moving else self.subtractor.correspondence(0, frame.gimbal, b.box)
+        cut = cut_sides(b.mask, b.box, self.rig.left.size, b.disparity, None if cm is None else cm.disparity,
+                        None if cm is None else cm.valid, self.visibility)
+        return extra_sigma_px(b.mask, cut, self.visibility) if any(cut) else (0.0, 0.0)
 
     def _foreground_low(self, blobs: list[Blob]) -> NDArray[np.uint8] | None:
         if not blobs:

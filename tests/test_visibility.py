@@ -1,0 +1,72 @@
+"""The centroid's uncertainty for a target seen only in part (tracker.visibility, issue 12 item 1): where
+the outline meets the image border or a nearer background, the 1-σ along that axis grows."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from tracker.localize import Localizer
+from tracker.rectify import Rectifier
+from tracker.sim.rig import default_rig
+from tracker.visibility import VisibilityConfig, cut_sides, extra_sigma_px
+
+CFG = VisibilityConfig()
+SIZE = (640, 480)
+
+
+def _person(box: tuple[int, int, int, int], rows: slice) -> np.ndarray:
+    """A mask over box with the rows `rows` of a 20 px wide figure set, centred in the box."""
+    x0, y0, x1, y1 = box
+    m = np.zeros((y1 - y0, x1 - x0), bool)
+    c = (x1 - x0) // 2
+    m[rows, c - 10:c + 10] = True
+    return m
+
+
+def test_a_target_wholly_in_view_before_a_far_background_is_not_cut() -> None:
+    box = (100, 100, 160, 220)
+    mask = _person(box, slice(10, 110))
+    bg = np.full(mask.shape, 5.0, np.float32)  # background farther than the target (disparity 9 px)
+    assert cut_sides(mask, box, SIZE, 9.0, bg, np.ones(mask.shape, bool), CFG) == (0, 0)
+    assert cut_sides(mask, box, SIZE, 9.0, None, None, CFG) == (0, 0)
+
+
+def test_the_image_border_cuts_a_target() -> None:
+    box = (100, 400, 160, 480)
+    mask = _person(box, slice(10, 80))  # down to the bottom row of the image
+    assert cut_sides(mask, box, SIZE, 9.0, None, None, CFG) == (0, 1)
+    box = (0, 100, 40, 220)
+    mask = np.zeros((120, 40), bool)
+    mask[10:110, 0:20] = True  # from the left edge of the image
+    assert cut_sides(mask, box, SIZE, 9.0, None, None, CFG) == (1, 0)
+
+
+def test_a_nearer_background_below_cuts_a_target_and_a_farther_one_does_not() -> None:
+    box = (100, 100, 160, 220)
+    mask = _person(box, slice(10, 70))  # the legs hidden from row 70 of the box on
+    bg = np.full(mask.shape, 5.0, np.float32)
+    bg[70:] = 12.0  # a hedge nearer than the target (disparity 9 px)
+    valid = np.ones(mask.shape, bool)
+    assert cut_sides(mask, box, SIZE, 9.0, bg, valid, CFG) == (0, 1)
+    assert cut_sides(mask, box, SIZE, 9.0, bg, np.zeros(mask.shape, bool), CFG) == (0, 0)  # not known there
+    bg[70:] = 9.2  # within nearer_px of the target: the ground it stands on, not an occluder
+    assert cut_sides(mask, box, SIZE, 9.0, bg, valid, CFG) == (0, 0)
+
+
+def test_the_extra_sigma_is_kappa_times_the_visible_extent_per_cut_side() -> None:
+    mask = np.zeros((100, 50), bool)
+    mask[10:70, 5:25] = True  # 20 x 60 px
+    assert extra_sigma_px(mask, (0, 1), CFG) == (0.0, CFG.kappa * 60)
+    sx, sy = extra_sigma_px(mask, (2, 0), CFG)
+    assert np.isclose(sx, CFG.kappa * 20 * np.sqrt(2)) and sy == 0.0
+
+
+def test_the_localizer_widens_only_the_cut_axis() -> None:
+    loc = Localizer(Rectifier(default_rig()))
+    c = np.array([300.0, 250.0])
+    plain = loc.locate(c, 20.0, 0.05, 1200, None)
+    cut = loc.locate(c, 20.0, 0.05, 1200, None, (0.0, 24.0))
+    assert (cut.r, cut.theta, cut.phi) == (plain.r, plain.theta, plain.phi)
+    assert cut.sigma_phi > 20 * plain.sigma_phi
+    assert np.isclose(cut.sigma_phi, 24.0 / 600.0, rtol=0.1)  # 24 px at f = 600 px, in radians
+    assert np.isclose(cut.sigma_theta, plain.sigma_theta, rtol=0.05)

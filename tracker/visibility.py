@@ -1,0 +1,69 @@
+"""How far off a partly seen target's centroid may lie: the uncertainty of eq. (10) where the target goes on
+beyond what the cameras see (issue 12 item 1).
+
+The centroid of the visible pixels (eq. 10) is the target's centre only when all of it is seen. Where its
+outline meets the image border, or a background nearer than the target (a hedge before a walker's legs, a
+post), it may go on out of sight: the visible centroid then lies off the centre, towards the visible part,
+by half of what is hidden. How much is hidden is unknown from one frame; the 1-σ added along that axis is
+`kappa` times the visible extent (a person two-thirds hidden by a hedge is off by about one visible height).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+BoolA = NDArray[np.bool_]
+F32 = NDArray[np.float32]
+_RING = np.ones((5, 5), np.uint8)
+
+
+@dataclass(frozen=True)
+class VisibilityConfig:
+    """kappa: extra 1-σ per cut side, as a fraction of the visible extent along that axis; nearer_px: how
+    much larger (px) the background's disparity must be than the target's for it to hide the target;
+    min_share: the share of a side's ring pixels that must be hidden or off the image for it to count."""
+
+    kappa: float = 0.4
+    nearer_px: float = 0.5
+    min_share: float = 0.3
+
+
+def cut_sides(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, int], disparity: float,
+              bg_disparity: F32 | None, bg_valid: BoolA | None, cfg: VisibilityConfig) -> tuple[int, int]:
+    """How many sides along x (left, right) and along y (top, bottom) the target is cut at: the mask meets
+    that edge of the image or, where the background's rectified disparity is known (bg_disparity and
+    bg_valid, (h, w) over the box; None: not known), at least min_share of the side's part of its 2-px
+    ring outside the mask lies on a background nearer than the target by nearer_px (the ring split into
+    sides about the mask's centroid, scaled by its extent). mask: (h, w) over box (x0, y0, x1, y1), raw
+    left pixels; size: the image's (width, height)."""
+    x0, y0, _, _ = box
+    w, h = size
+    m8 = mask.view(np.uint8)
+    bx, by, bw, bh = cv2.boundingRect(m8)
+    if bw == 0:
+        return 0, 0
+    cut = [x0 + bx <= 0, x0 + bx + bw >= w, y0 + by <= 0, y0 + by + bh >= h]  # left, right, top, bottom
+    if bg_disparity is not None and bg_valid is not None:
+        ring = (cv2.dilate(m8, _RING) > 0) & ~mask  # the part of the 2-px ring inside the box
+        ys, xs = np.nonzero(ring)
+        if xs.size:
+            mom = cv2.moments(m8, binaryImage=True)
+            dx = (xs - mom["m10"] / mom["m00"]) / max(bw / 2.0, 1.0)
+            dy = (ys - mom["m01"] / mom["m00"]) / max(bh / 2.0, 1.0)
+            nearer = bg_valid[ys, xs] & (bg_disparity[ys, xs] > disparity + cfg.nearer_px)
+            across = np.abs(dx) >= np.abs(dy)
+            for k, side in enumerate((across & (dx < 0), across & (dx > 0), ~across & (dy < 0), ~across & (dy > 0))):
+                n = int(np.count_nonzero(side))
+                cut[k] |= n > 0 and int(np.count_nonzero(nearer & side)) >= cfg.min_share * n
+    return int(cut[0]) + int(cut[1]), int(cut[2]) + int(cut[3])
+
+
+def extra_sigma_px(mask: BoolA, cut: tuple[int, int], cfg: VisibilityConfig) -> tuple[float, float]:
+    """The centroid's extra 1-σ (px) along x and y: kappa times the visible width / height for each cut
+    side (added in quadrature)."""
+    _, _, bw, bh = cv2.boundingRect(mask.view(np.uint8))
+    return cfg.kappa * bw * float(np.sqrt(cut[0])), cfg.kappa * bh * float(np.sqrt(cut[1]))
