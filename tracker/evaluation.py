@@ -43,6 +43,13 @@ class EvalReport:
     elevation_rmse_deg: float
     step_ms_median: float
     render_ms_median: float
+    # issue 12 item 1: how honest the reported 1-σ are, per coordinate (see sigma_consistency)
+    range_within_1sigma: float = float("nan")
+    range_nees: float = float("nan")
+    azimuth_within_1sigma: float = float("nan")
+    azimuth_nees: float = float("nan")
+    elevation_within_1sigma: float = float("nan")
+    elevation_nees: float = float("nan")
     extra: dict[str, float] = field(default_factory=dict)
 
     def to_json(self) -> dict[str, object]:
@@ -71,6 +78,9 @@ class _Acc:
     limit: list[float] = field(default_factory=list)
     az: list[float] = field(default_factory=list)
     el: list[float] = field(default_factory=list)
+    z_r: list[float] = field(default_factory=list)  # error / reported 1-σ, per detected frame
+    z_az: list[float] = field(default_factory=list)
+    z_el: list[float] = field(default_factory=list)
     f1_frames: list[float] = field(default_factory=list)
     mog2_f1: list[float] = field(default_factory=list)
     step_ms: list[float] = field(default_factory=list)
@@ -79,6 +89,15 @@ class _Acc:
 
 def _rms(v: list[float]) -> float:
     return float(np.sqrt(np.mean(np.square(v)))) if v else float("nan")
+
+
+def sigma_consistency(z: list[float]) -> tuple[float, float]:
+    """Of normalised errors z = error / 1-σ: the fraction with |z| <= 1 (68.3 % for honest Gaussian σ)
+    and the mean normalised estimation error squared, NEES = mean(z²) (1 for honest σ); nan when empty."""
+    if not z:
+        return float("nan"), float("nan")
+    a = np.asarray(z, float)
+    return float(np.mean(np.abs(a) <= 1.0)), float(np.mean(a * a))
 
 
 def _f1(tp: int, fp: int, fn: int) -> float:
@@ -132,6 +151,10 @@ def score_frame(acc: _Acc, res: FrameResult, truth: FrameTruth, pipe: Pipeline, 
     acc.limit.append(z * z * 0.1 / (rect.b * rect.f))
     acc.az.append(float(np.degrees(np.angle(np.exp(1j * (loc.theta - th_t))))))
     acc.el.append(float(np.degrees(loc.phi - ph_t)))
+    tiny = 1e-12  # a zero σ makes any error infinitely many σ
+    acc.z_r.append((loc.r - r_t) / max(loc.sigma_r, tiny))
+    acc.z_az.append(float(np.radians(acc.az[-1])) / max(loc.sigma_theta, tiny))
+    acc.z_el.append(float(np.radians(acc.el[-1])) / max(loc.sigma_phi, tiny))
 
 
 def run_scenario(name: str | Scenario, frames: int | None = None, seed: int = 0, rig: StereoRig | None = None,
@@ -200,6 +223,7 @@ def _report(name: str, seed: int, n: int, acc: _Acc, gain: Callable[[float], flo
         if acc.mog2_f1:
             extra["mog2_pixel_f1_at_steps_min"] = float(min(acc.mog2_f1[j] for j in at))
             extra["mog2_pixel_f1_at_steps_mean"] = float(np.mean([acc.mog2_f1[j] for j in at]))
+    (r_in, r_nees), (a_in, a_nees), (e_in, e_nees) = (sigma_consistency(z) for z in (acc.z_r, acc.z_az, acc.z_el))
     return EvalReport(
         scenario=name, seed=seed, frames=n, visible_frames=acc.visible,
         detection_rate=acc.detected / max(acc.visible, 1), false_target_frames=acc.false_target,
@@ -209,4 +233,5 @@ def _report(name: str, seed: int, n: int, acc: _Acc, gain: Callable[[float], flo
         range_limit_m=float(np.mean(acc.limit)) if acc.limit else float("nan"),
         azimuth_rmse_deg=_rms(acc.az), elevation_rmse_deg=_rms(acc.el),
         step_ms_median=float(np.median(acc.step_ms)), render_ms_median=float(np.median(acc.render_ms)),
-        extra=extra)
+        range_within_1sigma=r_in, range_nees=r_nees, azimuth_within_1sigma=a_in, azimuth_nees=a_nees,
+        elevation_within_1sigma=e_in, elevation_nees=e_nees, extra=extra)
