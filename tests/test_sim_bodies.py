@@ -101,7 +101,7 @@ def test_person_stands_on_the_ground_and_its_truth_is_its_volume_centroid() -> N
 
 def test_a_walker_near_the_cameras_is_matched_and_kept() -> None:
     # a walker at 3 m: its box's centre lies between its swinging legs, where no single disparity
-    # matches; the verifier matches about the region's centroid, then its thirds (tracker.verify)
+    # matches; the verifier then matches the region's row thirds (tracker.verify)
     from tracker.evaluation import survey_poses
     from tracker.pipeline import Pipeline
     from tracker.sim.scenarios import SCENARIOS, _walk

@@ -283,11 +283,9 @@ class Verifier:
         w, h = rect.rig.left.size
         rx0, ry0 = int(np.floor(rc[:, 0].min())), max(int(np.floor(rc[:, 1].min())), 0)
         rx1, ry1 = int(np.ceil(rc[:, 0].max())) + 1, min(int(np.ceil(rc[:, 1].max())) + 1, h)
-        # a large object is matched on a window about its centroid only: its disparity is then already far
-        # more precise than its range needs (the range error grows as z², the object shrinks as 1/z); the
-        # centroid, not the box's centre, lies on the object (a walker's box centre is between its legs)
-        m = cv2.moments(region.view(np.uint8), binaryImage=True)
-        cx, cy = (int(v) for v in rect.rect_of_raw[0][y0 + int(m["m01"] / m["m00"]), x0 + int(m["m10"] / m["m00"])])
+        # a large object is matched on a central window only: its disparity is then already far more
+        # precise than its range needs (the range error grows as z², the object shrinks as 1/z)
+        cx, cy = (rx0 + rx1) // 2, (ry0 + ry1) // 2
         rx0, rx1 = max(rx0, cx - _MATCH_HALF[0]), min(rx1, cx + _MATCH_HALF[0])
         ry0, ry1 = max(ry0, cy - _MATCH_HALF[1]), min(ry1, cy + _MATCH_HALF[1])
         d_hi = cfg.max_disparity if d_hint is None else int(np.ceil(d_hint)) + 8
