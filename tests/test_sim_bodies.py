@@ -121,4 +121,4 @@ def test_a_walker_near_the_cameras_is_matched_and_kept() -> None:
         fg = pipe.step(sf.frame).foreground_mask(truth.shape)
         recall.append((fg & truth).sum() / truth.sum())
     seen = " ".join(f"{r:.2f}" for r in recall)
-    assert np.mean(recall[3:]) > 0.7 and sum(r < 0.5 for r in recall[3:]) <= 1, seen  # before: 8 frames lost
+    assert np.mean(recall[3:]) > 0.7 and min(recall[3:]) > 0.2, seen  # before: 8 frames lost (recall 0)
