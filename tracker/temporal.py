@@ -33,15 +33,8 @@ from numpy.typing import NDArray
 from tracker.detect import Box, StereoSubtractor
 from tracker.frames import StereoFrame
 from tracker.rectify import Rectifier
-from tracker.verify import (
-    Blob,
-    Verifier,
-    background_disparity,
-    largest_region,
-    mask_centroid,
-    nearest_hint,
-    temporal_outline,
-)
+from tracker.regions import background_disparity, mask_centroid, nearest_hint
+from tracker.verify import Blob, Verifier, largest_region, temporal_outline
 
 F32 = NDArray[np.float32]
 F64 = NDArray[np.float64]

@@ -19,6 +19,7 @@ from tracker.bgdepth import CorrespondenceMap
 from tracker.detect import Box, StereoSubtractor
 from tracker.frames import StereoFrame
 from tracker.rectify import Rectifier
+from tracker.regions import background_disparity, mask_centroid, nearest_hint, row_thirds
 from tracker.stereo import RegionMatch, match_region, refine_region
 
 U8 = NDArray[np.uint8]
@@ -136,44 +137,6 @@ def _taken(blob: Blob, changed: BoolA | None) -> BoolA:
     return np.asarray(cv2.dilate(m8 | shadow, _TAKEN) > 0)
 
 
-def mask_centroid(m8: U8) -> tuple[int, F64]:
-    """Pixel count Σ c(i, j) and centroid (Σ i c / Σ c, Σ j c / Σ c) (2,) of a 0/1 mask (eq. 10), from its
-    column and row sums."""
-    cols = cv2.reduce(m8, 0, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel()  # Σ_j c(i, j) per column i
-    rows = cv2.reduce(m8, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel()
-    n = int(cols.sum())
-    return n, np.array([float(cols @ np.arange(cols.size)) / n, float(rows @ np.arange(rows.size)) / n])
-
-
-def background_disparity(cm: CorrespondenceMap, obj: BoolA, c: F64) -> float:
-    """The known background's disparity right behind the object's centre c (box pixels), or at the
-    object pixel nearest to it; 0 when the background behind the object is unknown (no gap test then)."""
-    iy, ix = int(c[1]), int(c[0])
-    if obj[iy, ix] and cm.valid[iy, ix]:
-        return float(cm.disparity[iy, ix])
-    ys, xs = np.nonzero(obj & cm.valid)
-    if xs.size == 0:
-        return 0.0
-    k = int(np.argmin(np.hypot(xs - c[0], ys - c[1])))
-    return float(cm.disparity[ys[k], xs[k]])
-
-
-def nearest_hint(hints: F64 | None, region: BoolA, box: Box) -> float | None:
-    """The disparity of the predicted track nearest to the region's centre, if one lies inside it."""
-    if hints is None or len(hints) == 0:
-        return None
-    ys, xs = np.nonzero(region)
-    if xs.size == 0:
-        return None
-    x0, y0 = box[0], box[1]
-    inside = [h for h in hints if 0 <= int(h[1]) - y0 < region.shape[0] and 0 <= int(h[0]) - x0 < region.shape[1]
-              and region[int(h[1]) - y0, int(h[0]) - x0]]
-    if not inside:
-        return None
-    c = np.array([xs.mean() + x0, ys.mean() + y0])
-    return float(min(inside, key=lambda h: float(np.hypot(*(h[:2] - c))))[2])
-
-
 class Verifier:
     """Turns candidate boxes into verified Blobs (or nothing)."""
 
@@ -269,15 +232,17 @@ class Verifier:
     def match_object(self, frame: StereoFrame, box: Box, obj: BoolA, d0: float | None) -> RegionMatch | None:
         """The object's disparity from matching its own pixels (a search over the whole range first when
         no prior d0 is known). None without a match, or with one the image edge may have cut short (the
-        right camera may not see it)."""
+        right camera may not see it). A region whose depth varies (a walker's swinging limbs about its
+        centroid) may match nowhere as one surface: then its top, middle and bottom thirds are tried."""
         d0 = self._coarse_disparity(frame, box, obj, d0)
         if d0 is None:
             return None
-        strips = self._strips(frame, box, obj, d0)
-        fine = None if strips is None else strips.match(obj, d0, 4)
-        if fine is None or strips is None or (strips.clipped and fine.disparity > strips.d_hi - 2.0):
-            return None
-        return fine
+        for part in row_thirds(obj):
+            strips = self._strips(frame, box, part, d0)
+            fine = None if strips is None else strips.match(part, d0, 4)
+            if fine is not None and strips is not None:
+                return None if strips.clipped and fine.disparity > strips.d_hi - 2.0 else fine
+        return None
 
     def _outline_stereo(self, frame: StereoFrame, box: Box, m_left: BoolA,
                         d_hint: float | None) -> tuple[BoolA, BoolA, float] | None:

@@ -8,10 +8,10 @@ applies the illumination gain and adds sensor noise from a pre-drawn bank.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
-from typing import TypeVar
+from typing import Protocol, TypeVar
 
 import cv2
 import numpy as np
@@ -26,6 +26,16 @@ F64 = NDArray[np.float64]
 F32 = NDArray[np.float32]
 U8 = NDArray[np.uint8]
 _T = TypeVar("_T")
+
+
+class Solid(Protocol):
+    """A moving thing that casts itself (tracker.sim.bodies.Body): world points bounding its image, and
+    a z-tested ray cast over a pixel box into the image, its depth (distance along the ray, m) and ids."""
+
+    def corners(self) -> F64: ...
+
+    def cast(self, view: _View, R_wr: F64, img: U8, depth: F32, t: float, ids: U8 | None,
+             box: tuple[int, int, int, int]) -> None: ...
 
 
 @dataclass(frozen=True)
@@ -43,6 +53,7 @@ class TargetTruth:
     area_left: int
     visible_fraction: float
     area_right: int = 0
+    near_depth_m: float = 0.0  # a solid body: how much nearer than `world` its nearest point is (m)
 
 
 @dataclass(frozen=True)
@@ -269,7 +280,7 @@ class SimRenderer:
             return [np.where(inv > 1e-20, view.ray_len / inv, np.float32(np.inf))
                     for view, inv in zip(self.views, self._static(gimbal)[1], strict=True)]
 
-    def render(self, index: int, t: float, gimbal: GimbalState, moving: list[Surface], gain: float,
+    def render(self, index: int, t: float, gimbal: GimbalState, moving: Sequence[Surface | Solid], gain: float,
                noisy: bool = True) -> tuple[StereoFrame, list[U8]]:
         """Render one pair at time t (s). Returns the frame and the (left, right) id images."""
         key = (round(gimbal.pan_deg, 6), round(gimbal.tilt_deg, 6))
@@ -301,10 +312,11 @@ class SimRenderer:
         frame = StereoFrame(index, left[0], right[0], t, t, gimbal)
         return frame, [left[1], right[1]]
 
-    def _cast_moving(self, k: int, R_wr: F64, moving: list[Surface], t: float, img8: U8,
+    def _cast_moving(self, k: int, R_wr: F64, moving: Sequence[Surface | Solid], t: float, img8: U8,
                      base_inv: F32, ids: U8) -> None:
         """Cast moving surfaces over the static scene (base_inv: its inverse distances 1/z, (H, W)), only
-        over their bounding boxes: the static depth is filled in for the window around them all."""
+        over their bounding boxes: the static depth is filled in for the window around them all. Solids
+        (tracker.sim.bodies) cast themselves, z-tested in the same depth."""
         view = self.views[k]
         cast = [(s, b) for s, b in ((s, _pixel_box(view, s.corners() @ R_wr)) for s in moving) if b is not None]
         self.windows[k] = None
@@ -316,5 +328,8 @@ class SimRenderer:
         depth = self._depth[k]  # valid inside the window only
         np.divide(view.ray_len[y0:y1, x0:x1], base_inv[y0:y1, x0:x1], out=depth[y0:y1, x0:x1])
         for s, b in cast:
-            _cast_plane_fast(view, R_wr, s, img8, depth, t, ids, b)
+            if isinstance(s, Surface):
+                _cast_plane_fast(view, R_wr, s, img8, depth, t, ids, b)
+            else:
+                s.cast(view, R_wr, img8, depth, t, ids, b)
         self.windows[k] = (x0, y0, x1, y1)

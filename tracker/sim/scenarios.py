@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import cv2
 import numpy as np
@@ -12,6 +12,7 @@ from numpy.typing import NDArray
 from tracker.closedloop_path import MANOEUVRE
 from tracker.frames import GimbalState, StereoFrame
 from tracker.geometry import StereoRig, gimbal_rotation
+from tracker.sim.bodies import BodyObject, body_texture
 from tracker.sim.endless import EndlessScene
 from tracker.sim.render import FrameTruth, SimRenderer, TargetTruth
 from tracker.sim.rig import default_rig
@@ -115,6 +116,8 @@ class Scenario:
     wall_m: float | None = None  # a textured wall across the view at this range (m) hides what is behind it
     person: bool = False  # targets are upright person-sized boards (0.5 x 1.7 m) instead of round plates
     enter_s: float = 0.0  # the targets of `paths` appear at this scene time (s)
+    bodies: bool = False  # targets drawn as solid bodies (tracker.sim.bodies): the scenario `NAME:body`
+    body_kinds: tuple[str, ...] = ("person", "sphere")  # with `bodies`: the kind of target 1, of the others
 
     @property
     def endless(self) -> bool:
@@ -128,16 +131,17 @@ SCENARIOS: dict[str, Scenario] = {
         Scenario("illumination", "walk with global illumination steps and ramps of ±30 %",
                  gain=_illumination_gain),
         Scenario("foliage", "walk beside a swaying bush", foliage=True),
-        Scenario("approach", "target approaching from 30 m to 2 m", paths=((1, _approach),)),
+        Scenario("approach", "target approaching from 30 m to 2 m", paths=((1, _approach),),
+                 body_kinds=("sphere",)),
         Scenario("two-targets", "primary at 8-12 m, a second object crossing in front of it at 5 m",
                  paths=((1, _primary_far), (2, _crosser))),
         Scenario("pan", "cameras panning ±12° and tilting ±3° on a schedule while the target moves",
                  frames=240, paths=((1, _panned),), gimbal=_pan_schedule),
         Scenario("occlusion", "target passing behind a post at 9 m (partial, then full occlusion)",
-                 frames=330, paths=((1, _behind_post),)),
+                 frames=330, paths=((1, _behind_post),), body_kinds=("vehicle",)),
         Scenario("manoeuvre", "closed loop: the servos follow a target turning at up to 30°/s, accelerating "
                  "and stopping, over azimuth -19° to +38°", frames=294, paths=((1, MANOEUVRE),),
-                 closed_loop=True),
+                 closed_loop=True, body_kinds=("sphere",)),
         Scenario("endless", "people (0.5 x 1.7 m) entering, walking, stopping, turning and leaving at 3 to 30 m, "
                  "for ever (seeded), beside a swaying bush, light ramps and ±20-30 % steps, now and then a "
                  "second object; eval/bench run 2 minutes", frames=3600, paths=(), foliage=True,
@@ -178,11 +182,18 @@ def near_wall_scenario(gap_m: float, wall_m: float = 7.0, light: bool = False, f
                     gain=_illumination_gain if light else _unity, wall_m=wall_m, person=True)
 
 
+BODY_SUFFIX = ":body"
+
+
 def get_scenario(name: str) -> Scenario:
+    """A scenario by name; `NAME:body` is scenario NAME with its targets drawn as solid bodies."""
+    base = name.removesuffix(BODY_SUFFIX)
     try:
-        return SCENARIOS[name]
+        scenario = SCENARIOS[base]
     except KeyError:
-        raise ValueError(f"unknown scenario {name!r}; known: {', '.join(sorted(SCENARIOS))}") from None
+        raise ValueError(f"unknown scenario {name!r}; known: {', '.join(sorted(SCENARIOS))} "
+                         f"(each also as NAME{BODY_SUFFIX})") from None
+    return replace(scenario, name=name, bodies=True) if base != name else scenario
 
 
 @dataclass(frozen=True)
@@ -207,12 +218,17 @@ class SimRig:
         static: list[Surface] = backdrop(rng)
         self._foliage = foliage(rng, np.array([-1.3, 1.0, 6.0]), 0.7, 0.5) if scenario.foliage else None
         textures = {1: plate_texture(rng), 2: plate_texture(rng, 150, 235)}
-        self.objects = [MovingObject(tid, path, 0.3, textures[min(tid, 2)]) for tid, path in scenario.paths]
+        self.objects: list[MovingObject | BodyObject] = [
+            MovingObject(tid, path, 0.3, textures[min(tid, 2)]) for tid, path in scenario.paths]
         if scenario.wall_m is not None:
             static.append(near_wall(rng, scenario.wall_m))
         if scenario.person:
             self.objects = [MovingObject(tid, path, PERSON_HALF_W_M, person_texture(rng, 90, 215), half_h_m=0.85)
                             for tid, path in scenario.paths]
+        self._body_rng = np.random.default_rng(seed + 31337)  # not `rng`: the plates' draws stay as they are
+        self._bodies: dict[int, tuple[MovingObject, BodyObject]] = {}  # endless: its objects as bodies
+        if scenario.bodies:
+            self.objects = [self._as_body(o) for o in self.objects]
         if scenario.enter_s > 0:
             for o in self.objects:
                 o.visible = self._entered
@@ -242,10 +258,31 @@ class SimRig:
         replay). For an endless scenario the same people come again."""
         self._pass_start = self.index
 
-    def objects_at(self, t: float) -> list[MovingObject]:
+    def objects_at(self, t: float) -> list[MovingObject | BodyObject]:
         """The moving objects whose truth is reported at scene time t (s): all the scenario's paths, or the
-        endless script's objects present at t."""
-        return self.script.present(t) if self.script is not None else self.objects
+        endless script's objects present at t (as bodies in a `NAME:body` scenario)."""
+        if self.script is None:
+            return self.objects
+        present = self.script.present(t)
+        return [self._as_body(o) for o in present] if self.scenario.bodies else list(present)
+
+    def _as_body(self, obj: MovingObject | BodyObject) -> BodyObject:
+        """A plate or person board as a solid body: id 1 of the scenario's first body kind, the others of
+        its last (an endless scene's people stay people, its plates become spheres); kept per object."""
+        if isinstance(obj, BodyObject):
+            return obj
+        known = self._bodies.get(id(obj))
+        if known is not None and known[0] is obj:
+            return known[1]
+        kinds = self.scenario.body_kinds
+        kind = "person" if obj.half_h_m is not None else kinds[0] if obj.target_id == 1 else kinds[-1]
+        if self.scenario.script is not None and obj.half_h_m is None:
+            kind = "sphere"
+        body = BodyObject(obj.target_id, kind, obj.trajectory, body_texture(self._body_rng, kind), obj.visible)
+        if len(self._bodies) > 64:
+            self._bodies.clear()
+        self._bodies[id(obj)] = (obj, body)
+        return body
 
     def background(self, gimbal: GimbalState | None = None) -> StereoFrame:
         """An empty-scene pair (no moving objects; foliage in its state at t = -1 s) at the given pose: what
@@ -279,7 +316,7 @@ class SimRig:
     def close(self) -> None:
         pass
 
-    def _truth(self, obj: MovingObject, t: float, R_wr: F64, ids: list[NDArray[np.uint8]]) -> TargetTruth:
+    def _truth(self, obj: MovingObject | BodyObject, t: float, R_wr: F64, ids: list[NDArray[np.uint8]]) -> TargetTruth:
         """Truth of one object at scene time t (s): its centre, projections, and its pixels' centroids and
         areas in each image (ids: the (left, right) id images); visible fraction against area·(f/z)²."""
         tid, world = obj.target_id, obj.trajectory(t)
@@ -299,5 +336,6 @@ class SimRig:
             cents.append(np.array([m["m10"] / m["m00"] + x0, m["m01"] / m["m00"] + y0])
                          if m["m00"] > 0 else None)
         expected = obj.area_m2 * (self.rig.left.f / max(rig_p[2], 0.1)) ** 2
+        near = obj.near_depth_m(t, R_wr @ self.rig.left.c) if isinstance(obj, BodyObject) else 0.0
         return TargetTruth(tid, world, rig_p, pl, pr, cents[0], cents[1], areas[0],
-                           min(areas[0] / expected, 1.0), areas[1])
+                           min(areas[0] / expected, 1.0), areas[1], near)

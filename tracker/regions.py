@@ -1,0 +1,70 @@
+"""Small measures of an object's region (a bool mask over its box): its centroid (paper eq. 10), the
+background's disparity behind it, the nearest track's predicted disparity, and its row thirds (tracker.verify
+matches a region whose depth varies on its parts)."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from tracker.bgdepth import CorrespondenceMap
+
+F64 = NDArray[np.float64]
+U8 = NDArray[np.uint8]
+BoolA = NDArray[np.bool_]
+Box = tuple[int, int, int, int]
+
+
+def mask_centroid(m8: U8) -> tuple[int, F64]:
+    """Pixel count Σ c(i, j) and centroid (Σ i c / Σ c, Σ j c / Σ c) (2,) of a 0/1 mask (eq. 10), from its
+    column and row sums."""
+    cols = cv2.reduce(m8, 0, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel()  # Σ_j c(i, j) per column i
+    rows = cv2.reduce(m8, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel()
+    n = int(cols.sum())
+    return n, np.array([float(cols @ np.arange(cols.size)) / n, float(rows @ np.arange(rows.size)) / n])
+
+
+def background_disparity(cm: CorrespondenceMap, obj: BoolA, c: F64) -> float:
+    """The known background's disparity right behind the object's centre c (box pixels), or at the
+    object pixel nearest to it; 0 when the background behind the object is unknown (no gap test then)."""
+    iy, ix = int(c[1]), int(c[0])
+    if obj[iy, ix] and cm.valid[iy, ix]:
+        return float(cm.disparity[iy, ix])
+    ys, xs = np.nonzero(obj & cm.valid)
+    if xs.size == 0:
+        return 0.0
+    k = int(np.argmin(np.hypot(xs - c[0], ys - c[1])))
+    return float(cm.disparity[ys[k], xs[k]])
+
+
+def row_thirds(obj: BoolA) -> Iterator[BoolA]:
+    """The region, then its parts in the top, middle and bottom thirds of its rows (of 64 px or more)."""
+    yield obj
+    rows = np.flatnonzero(obj.any(axis=1))
+    if rows.size == 0:
+        return
+    cuts = [int(v) for v in np.linspace(rows[0], rows[-1] + 1, 4)]
+    for a, b in zip(cuts[:-1], cuts[1:], strict=True):
+        part = np.zeros_like(obj)
+        part[a:b] = obj[a:b]
+        if int(np.count_nonzero(part)) >= 64:
+            yield part
+
+
+def nearest_hint(hints: F64 | None, region: BoolA, box: Box) -> float | None:
+    """The disparity of the predicted track nearest to the region's centre, if one lies inside it."""
+    if hints is None or len(hints) == 0:
+        return None
+    ys, xs = np.nonzero(region)
+    if xs.size == 0:
+        return None
+    x0, y0 = box[0], box[1]
+    inside = [h for h in hints if 0 <= int(h[1]) - y0 < region.shape[0] and 0 <= int(h[0]) - x0 < region.shape[1]
+              and region[int(h[1]) - y0, int(h[0]) - x0]]
+    if not inside:
+        return None
+    c = np.array([xs.mean() + x0, ys.mean() + y0])
+    return float(min(inside, key=lambda h: float(np.hypot(*(h[:2] - c))))[2])
