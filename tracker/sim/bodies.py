@@ -29,6 +29,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from tracker.geometry import rot_x, rot_y
 from tracker.sim.scene import CAMERA_HEIGHT_M, U8, smooth_texture
 
 F64 = NDArray[np.float64]
@@ -53,18 +54,6 @@ class _ViewLike(Protocol):  # tracker.sim.render._View
 class _CamLike(Protocol):
     @property
     def c(self) -> F64: ...
-
-
-def _rot_y(a: float) -> F64:
-    """Rotation about the vertical (world y) by a (rad): local +z -> (sin a, 0, cos a)."""
-    c, s = np.cos(a), np.sin(a)
-    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
-
-
-def _rot_x(a: float) -> F64:
-    """Rotation about local x by a (rad): local +y (down) -> (0, cos a, sin a), a limb swung forward."""
-    c, s = np.cos(a), np.sin(a)
-    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
 
 
 @dataclass(frozen=True)
@@ -187,7 +176,7 @@ def _person_parts(base: F64, R: F64, phase: float) -> list[Part]:
         return Part(kind, base + R @ np.array(at), R @ Rl, np.array(half), tex)
 
     def limb(pivot: tuple[float, float, float], length: float, half_xz: float, a: float, tex: float) -> Part:
-        Rl = _rot_x(a)
+        Rl = rot_x(a)
         at = np.array(pivot) + Rl @ np.array([0.0, length, 0.0])
         return part("box", (float(at[0]), float(at[1]), float(at[2])), (half_xz, length, half_xz + 0.02), Rl, tex)
 
@@ -245,14 +234,14 @@ class BodyObject:
     def parts(self, t: float) -> list[Part]:
         p = self.path(t)
         if self.kind == "sphere":
-            return [Part("sphere", p, _rot_y(0.5 * t), np.full(3, SPHERE_R_M))]
+            return [Part("sphere", p, rot_y(0.5 * t), np.full(3, SPHERE_R_M))]
         v = (self.path(t + 0.05) - p) / 0.05
         moving = float(np.hypot(v[0], v[2])) > 0.2
         yaw = np.arctan2(v[0], v[2]) if moving else np.arctan2(-p[0], -p[2])  # else face the gimbal base
         base = np.array([p[0], CAMERA_HEIGHT_M, p[2]])
         if self.kind == "vehicle":
-            return _vehicle_parts(base, _rot_y(float(yaw)))
-        return _person_parts(base, _rot_y(float(yaw)), 2.0 * np.pi * t / 1.1 if moving else 0.0)
+            return _vehicle_parts(base, rot_y(float(yaw)))
+        return _person_parts(base, rot_y(float(yaw)), 2.0 * np.pi * t / 1.1 if moving else 0.0)
 
     def trajectory(self, t: float) -> F64:
         """The truth: the parts' volume centroid Σ V_i c_i / Σ V_i (world m, (3,))."""
