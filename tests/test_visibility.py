@@ -39,6 +39,10 @@ def test_the_image_border_cuts_a_target() -> None:
     mask = np.zeros((120, 40), bool)
     mask[10:110, 0:20] = True  # from the left edge of the image
     assert cut_sides(mask, box, SIZE, 9.0, None, None, CFG) == (1, 0)
+    mask[:, :11] = False  # from column 11 = disparity 9 + 2: the right camera does not see columns 0-8
+    assert cut_sides(mask, box, SIZE, 9.0, None, None, CFG) == (1, 0)
+    mask[:, 11] = False
+    assert cut_sides(mask, box, SIZE, 9.0, None, None, CFG) == (0, 0)
 
 
 def test_a_nearer_background_below_cuts_a_target_and_a_farther_one_does_not() -> None:
