@@ -96,3 +96,24 @@ def test_awkward_scenes_equal_the_exact_ray_cast(disc: bool) -> None:
     for g in (GimbalState(0.0, 0.0), GimbalState(17.3, -4.1), GimbalState(-31.0, 8.0)):
         _assert_matches(renderer, surfaces, g, edge=1e-4 if disc else 1e-5)
     assert not np.isfinite(renderer.static_depth(GimbalState(0.0, 8.0))[0]).all()  # some sky in view
+
+
+def test_row_bands_are_each_done_once_by_either_thread_and_errors_reach_wait() -> None:
+    from concurrent.futures import ThreadPoolExecutor
+
+    done: list[tuple[int, int]] = []
+    bands = render._Bands(100, lambda r0, r1: done.append((r0, r1)))
+    with ThreadPoolExecutor(1) as pool:
+        pool.submit(bands.run)
+        bands.run()
+        bands.wait()
+    assert sorted(done) == [(r, min(r + render._Bands.BAND, 100)) for r in range(0, 100, render._Bands.BAND)]
+
+    def fail(r0: int, r1: int) -> None:
+        if r0 > 0:
+            raise ValueError("band failed")
+
+    bad = render._Bands(100, fail)
+    bad.run()
+    with pytest.raises(ValueError, match="band failed"):
+        bad.wait()

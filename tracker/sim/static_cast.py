@@ -270,10 +270,10 @@ def _runs(grid: _Grid, exact: B) -> tuple[B, I64, I64]:
     """The runs of cells not cast per pixel along each row of cells: which cells are in one, (ny-1)·nx
     flat with a column ending each row, and each run's first pixel (flat padded index) and length."""
     ny, nx = grid.shape
-    free = np.zeros((ny - 1, nx), bool)
-    free[:, :-1] = ~exact
-    f = free.ravel()
-    edge = np.flatnonzero(np.diff(f, prepend=False, append=False))  # run starts and ends, alternating
+    free = np.zeros((ny - 1) * nx + 2, bool)  # a False either side: every run starts and ends
+    f = free[1:-1]
+    f.reshape(ny - 1, nx)[:, :-1] = ~exact
+    edge = np.flatnonzero(free[1:] != free[:-1])  # run starts and ends, alternating
     i, j = np.divmod(edge[::2], nx)
     return f, grid.cell_first[i, j], edge[1::2] - edge[::2]
 
@@ -290,9 +290,9 @@ def _spread(grid: _Grid, f: B, seed: NDArray[np.intp], length: I64) -> tuple[NDA
     pad = np.full((ny + 1, nx + 1), -2, np.int16)
     pad[1:-1, 1:-1] = cell.reshape(ny - 1, nx)[:, :-1]
     hi_lab = np.maximum(np.maximum(pad[:-1, :-1], pad[:-1, 1:]), np.maximum(pad[1:, :-1], pad[1:, 1:]))
-    big = np.where(pad == -2, np.iinfo(np.int16).max, pad).astype(np.int16)
+    big = (pad + np.int16(1)).view(np.uint16)  # label + 1, and -2 wrapped to the largest: never the least
     lo_lab = np.minimum(np.minimum(big[:-1, :-1], big[:-1, 1:]), np.minimum(big[1:, :-1], big[1:, 1:]))
-    clash = (lo_lab != hi_lab) & (hi_lab > -2)
+    clash = (lo_lab != (hi_lab + np.int16(1)).view(np.uint16)) & (hi_lab > -2)
     hi_lab[clash] = -2
     return hi_lab, clash[:-1, :-1] | clash[1:, :-1] | clash[:-1, 1:] | clash[1:, 1:], pad[1:-1, 1:-1]
 
@@ -380,18 +380,38 @@ class StaticScene:
     def draw(self, plan: Plan) -> tuple[U8, F32]:
         """A plan's image (H, W) uint8 and inverse distances 1/z (H, W) float32: the node values
         interpolated (one cv2.resize), the pixels cast one by one put in, divided by W and textured (one
-        cv2.remap)."""
+        cv2.remap). prepare() then texture() of every row."""
+        X, Y, W = self.prepare(plan)
+        img = np.empty(W.shape, np.uint8)
+        if plan.nodes is None:
+            img[:] = 0
+        else:
+            self.texture(X, Y, W, img, 0, len(img))
+        return img, W
+
+    def prepare(self, plan: Plan) -> tuple[F32, F32, F32]:
+        """A plan's (X, Y, W) at every pixel, (H, W) float32 each (views with a row stride): the node
+        values interpolated (one cv2.resize) and the pixels cast one by one put in. texture() turns rows of
+        them into the image."""
         cam, grid = self.cams[plan.k], self._grids[plan.k]
         w, h = cam.size
         if plan.nodes is None:
-            return np.zeros((h, w), np.uint8), np.full((h, w), _NO_HIT[2], np.float32)
+            return (np.full((h, w), _NO_HIT[0], np.float32), np.full((h, w), _NO_HIT[1], np.float32),
+                    np.full((h, w), _NO_HIT[2], np.float32))
         ny, nx = grid.shape
         full = np.asarray(cv2.resize(plan.nodes.reshape(3 * ny, nx), (nx * STEP, 3 * ny * STEP),
                                      interpolation=cv2.INTER_LINEAR)).reshape(3, -1)
         for c in range(3):
             full[c][plan.idx] = plan.vals[c]
         X, Y, W = full.reshape(3, ny * STEP, nx * STEP)[:, STEP:STEP + h, STEP:STEP + w]
-        cv2.divide(X, W, dst=X)  # in place: texture coordinates, the maps of the remap
-        cv2.divide(Y, W, dst=Y)
-        img = cv2.remap(self._atlas, X, Y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
-        return np.asarray(img, np.uint8), W
+        return X, Y, W
+
+    def texture(self, X: F32, Y: F32, W: F32, img: U8, r0: int, r1: int) -> None:
+        """Rows r0 to r1 of the image img (H, W) uint8, in place, from prepare()'s (X, Y, W): texture
+        coordinates X/W, Y/W (written over X and Y), one cv2.remap of the atlas. Rows are independent, so
+        two threads may texture different rows of one image at once (OpenCV releases the GIL)."""
+        x, y = X[r0:r1], Y[r0:r1]
+        cv2.divide(x, W[r0:r1], dst=x)  # in place: texture coordinates, the maps of the remap
+        cv2.divide(y, W[r0:r1], dst=y)
+        cv2.remap(self._atlas, x, y, cv2.INTER_LINEAR, dst=img[r0:r1], borderMode=cv2.BORDER_CONSTANT,
+                  borderValue=0)
