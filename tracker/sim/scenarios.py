@@ -196,10 +196,22 @@ def get_scenario(name: str) -> Scenario:
     return replace(scenario, name=name, bodies=True) if base != name else scenario
 
 
-@dataclass(frozen=True)
 class SimFrame:
-    frame: StereoFrame
-    truth: FrameTruth
+    """A rendered frame and its ground truth. The truth (projections, pixel centroids and areas of each
+    object) is worked out when first asked for: a source that only shows the frames (the server's) does
+    not pay for it."""
+
+    def __init__(self, frame: StereoFrame, truth: Callable[[], FrameTruth]):
+        self.frame = frame
+        self._make: Callable[[], FrameTruth] | None = truth
+        self._truth: FrameTruth | None = None
+
+    @property
+    def truth(self) -> FrameTruth:
+        if self._truth is None:
+            assert self._make is not None
+            self._truth, self._make = self._make(), None
+        return self._truth
 
 
 class SimRig:
@@ -236,7 +248,7 @@ class SimRig:
         self.renderer = SimRenderer(self.rig, static, seed, noise_sigma)
         self.index = 0
         self._pass_start = 0  # index of the current pass's first frame
-        self.last_truth: FrameTruth | None = None
+        self._last: SimFrame | None = None
 
     def _entered(self, t: float) -> bool:
         return t >= self.scenario.enter_s
@@ -304,10 +316,19 @@ class SimRig:
             moving.append(self._foliage)
         gain = self.script.gain(ts) if self.script is not None else self.scenario.gain(ts)
         frame, ids = self.renderer.render(i, t, g, moving, gain)
-        truth = FrameTruth(t, g, tuple(self._truth(o, ts, R_wr, ids) for o in objects), ids[0], ids[1])
+        windows = tuple(self.renderer.windows)
+
+        def truth() -> FrameTruth:
+            return FrameTruth(t, g, tuple(self._truth(o, ts, R_wr, ids, windows) for o in objects), ids[0], ids[1])
+
         self.index += 1
-        self.last_truth = truth
-        return SimFrame(frame, truth)
+        self._last = SimFrame(frame, truth)
+        return self._last
+
+    @property
+    def last_truth(self) -> FrameTruth | None:
+        """The truth of the last frame rendered (None before the first)."""
+        return None if self._last is None else self._last.truth
 
     def read(self) -> StereoFrame | None:
         """FrameSource protocol: the next frame, None after the scenario's last."""
@@ -316,9 +337,11 @@ class SimRig:
     def close(self) -> None:
         pass
 
-    def _truth(self, obj: MovingObject | BodyObject, t: float, R_wr: F64, ids: list[NDArray[np.uint8]]) -> TargetTruth:
+    def _truth(self, obj: MovingObject | BodyObject, t: float, R_wr: F64, ids: list[NDArray[np.uint8]],
+               windows: tuple[tuple[int, int, int, int] | None, ...]) -> TargetTruth:
         """Truth of one object at scene time t (s): its centre, projections, and its pixels' centroids and
-        areas in each image (ids: the (left, right) id images); visible fraction against area·(f/z)²."""
+        areas in each image (ids: the (left, right) id images, moving objects drawn only inside `windows`);
+        visible fraction against area·(f/z)²."""
         tid, world = obj.target_id, obj.trajectory(t)
         rig_p = R_wr.T @ world
         pl = self.rig.left.project(rig_p[None, :])[0]
@@ -326,7 +349,7 @@ class SimRig:
         cents: list[F64 | None] = []
         areas = [0, 0]
         for k, img in enumerate(ids):
-            win = self.renderer.windows[k]
+            win = windows[k]
             if win is None:
                 cents.append(None)
                 continue
