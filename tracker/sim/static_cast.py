@@ -116,7 +116,8 @@ def _segments(surfaces: list[Surface]) -> F64:
 class _Planes:
     """The atlas surfaces as arrays: unit normal, u and v axes, and centre P0, (S, 3) each (world, metres);
     texel size (S,) metres; each texture's centre in the atlas and half extent, (S, 2) (x, y) texels; and
-    the segments where the nearest surface can change (K, 2, 3) (see _segments)."""
+    the segments where the nearest surface can change (K, 2, 3) (see _segments); and u, v, normal stacked,
+    (3, S, 3)."""
 
     normal: F64
     u: F64
@@ -126,6 +127,7 @@ class _Planes:
     centre: F64
     half: F64
     segments: F64
+    axes: F64
 
 
 def _planes(surfaces: list[Surface], origins: F64) -> _Planes:
@@ -133,7 +135,8 @@ def _planes(surfaces: list[Surface], origins: F64) -> _Planes:
     texel = np.array([s.texel_m for s in surfaces])
     extent = np.array([(s.half_w, s.half_h) for s in surfaces]).reshape(-1, 2)
     normal, u, v, P0 = (np.array([getattr(s, a) for s in surfaces]).reshape(-1, 3) for a in ("normal", "u", "v", "P0"))
-    return _Planes(normal, u, v, P0, texel, origins + sizes / 2.0, extent / texel[:, None], _segments(surfaces))
+    return _Planes(normal, u, v, P0, texel, origins + sizes / 2.0, extent / texel[:, None], _segments(surfaces),
+                   np.stack([u, v, normal]))
 
 
 def _plane_rows(cam: Camera, R_wr: F64, p: _Planes) -> tuple[F64, F64]:
@@ -141,7 +144,7 @@ def _plane_rows(cam: Camera, R_wr: F64, p: _Planes) -> tuple[F64, F64]:
     (S,), the signed distance (m) from the camera centre to each plane."""
     R_wc = R_wr @ cam.R_rc.T  # camera -> world
     c = R_wr @ cam.c
-    axes = np.stack([p.u, p.v, p.normal])  # (3, S, 3)
+    axes = p.axes  # (3, S, 3): u, v, normal
     u_c, v_c, n_c = axes @ R_wc  # rows: R_wc.T @ vector
     a0, b0, q = (axes * (p.P0 - c)).sum(axis=2)  # -(c - P0)·u, -(c - P0)·v, n·(P0 - c)
     qd = np.where(np.abs(q) > 1e-9, q, 1e-9)[:, None]  # the camera in a plane: left to the caller
