@@ -8,7 +8,7 @@ import numpy as np
 from tracker.localize import Localizer
 from tracker.rectify import Rectifier
 from tracker.sim.rig import default_rig
-from tracker.visibility import VisibilityConfig, cut_sides, extra_sigma_px
+from tracker.visibility import VisibilityConfig, cut_sides, extra_sigma_px, padded
 
 CFG = VisibilityConfig()
 SIZE = (640, 480)
@@ -74,3 +74,37 @@ def test_the_localizer_widens_only_the_cut_axis() -> None:
     assert cut.sigma_phi > 20 * plain.sigma_phi
     assert np.isclose(cut.sigma_phi, 24.0 / 600.0, rtol=0.1)  # 24 px at f = 600 px, in radians
     assert np.isclose(cut.sigma_theta, plain.sigma_theta, rtol=0.05)
+
+
+def test_a_nearer_background_just_outside_a_tight_box_cuts_the_target() -> None:
+    box = (100, 100, 120, 160)
+    mask = np.ones((60, 20), bool)  # the mask fills its box: no ring inside it
+    mask[:, :2] = False
+    mask[:, 2:4] = True
+    m2, b2 = padded(mask[:, 2:], (102, 100, 120, 160), SIZE)
+    assert b2 == (100, 98, 122, 162) and m2.shape == (64, 22) and m2[2:62, 2:20].all() and not m2[:, :2].any()
+    bg = np.full(m2.shape, 5.0, np.float32)
+    bg[:, :2] = 14.0  # a post nearer than the target (disparity 9 px) just left of it
+    valid = np.ones(m2.shape, bool)
+    assert cut_sides(mask[:, 2:], (102, 100, 120, 160), SIZE, 9.0, bg[2:62, 2:20], valid[2:62, 2:20], CFG) == (0, 0)
+    assert cut_sides(m2, b2, SIZE, 9.0, bg, valid, CFG) == (1, 0)
+    assert padded(mask, (0, 0, 20, 60), SIZE)[1] == (0, 0, 22, 62)  # clipped to the image
+
+
+def test_a_nearer_background_a_shadow_band_left_of_the_target_cuts_it() -> None:
+    box = (100, 100, 140, 160)
+    mask = np.zeros((60, 40), bool)
+    mask[:, 20:40] = True
+    bg = np.full(mask.shape, 5.0, np.float32)
+    bg[:, :14] = 15.0  # a post at disparity 15 before a target at 9: the right camera misses 6 columns
+    valid = np.ones(mask.shape, bool)
+    assert cut_sides(mask, box, SIZE, 9.0, bg, valid, CFG) == (1, 0)
+    bg[:, :14] = 12.0  # nearer by 3 px only: its shadow ends 3 columns short of the ring
+    assert cut_sides(mask, box, SIZE, 9.0, bg, valid, CFG) == (0, 0)
+    mask[:, 20:40], mask[:, 0:20] = False, True
+    bg[:, :] = 5.0
+    bg[:, 20:] = 15.0  # the same post right of the target hides it with no band between
+    assert cut_sides(mask, box, SIZE, 9.0, bg, valid, CFG) == (1, 0)
+    bg[:, 20:] = 5.0
+    bg[:, 30:] = 15.0  # ... and one 10 columns off does not
+    assert cut_sides(mask, box, SIZE, 9.0, bg, valid, CFG) == (0, 0)

@@ -25,7 +25,7 @@ from tracker.schedule import VerifySchedule
 from tracker.temporal import TemporalConfig, TemporalDetector, without_duplicates
 from tracker.tracks import MultiTracker, TrackerConfig
 from tracker.verify import Blob, Verifier
-from tracker.visibility import VisibilityConfig, cut_sides, extra_sigma_px
+from tracker.visibility import VisibilityConfig, cut_sides, extra_sigma_px, padded
 
 F64 = NDArray[np.float64]
 STAGES = ("candidates", "verify", "localize", "track")
@@ -151,8 +151,9 @@ class Pipeline:
     def _partly_seen(self, frame: StereoFrame, b: Blob) -> tuple[float, float]:
         """The centroid's extra 1-σ (px, x and y) where the blob is cut by the image border or, while the
         cameras are still (its correspondence map is kept), by a nearer background (tracker.visibility)."""
-        cm = None if self.subtractor.moving else self.subtractor.correspondence(0, frame.gimbal, b.box)
-        cut = cut_sides(b.mask, b.box, self.rig.left.size, b.disparity, None if cm is None else cm.disparity,
+        mask, box = padded(b.mask, b.box, self.rig.left.size, left=2 + int(np.ceil(max(b.disparity, 0.0))))
+        cm = None if self.subtractor.moving else self.subtractor.correspondence(0, frame.gimbal, box)
+        cut = cut_sides(mask, box, self.rig.left.size, b.disparity, None if cm is None else cm.disparity,
                         None if cm is None else cm.valid, self.visibility)
         return extra_sigma_px(b.mask, cut, self.visibility) if any(cut) else (0.0, 0.0)
 
