@@ -20,6 +20,7 @@ from tracker.detect import DetectorConfig, StereoSubtractor, paint_masks
 from tracker.frames import StereoFrame
 from tracker.geometry import StereoRig
 from tracker.localize import Localization, Localizer
+from tracker.outline import OutlineConfig, warped_outline_sigma_px
 from tracker.rectify import Rectifier
 from tracker.schedule import VerifySchedule
 from tracker.temporal import TemporalConfig, TemporalDetector, without_duplicates
@@ -79,6 +80,7 @@ class Pipeline:
         self.tracker = MultiTracker(tracker)
         self.schedule = VerifySchedule(verify_budget_ms)
         self.visibility = VisibilityConfig()
+        self.outline = OutlineConfig()
         self._last_gain = 1.0
         self.learner: StreamLearner | None = None
 
@@ -127,7 +129,7 @@ class Pipeline:
         blobs = self.temporal.detect(frame, blobs, hints)  # cameras still: objects too near their background
         t2 = time.perf_counter()
         locs = [self.localizer.locate(b.centroid_rect, b.disparity, b.disparity_sigma, b.area, frame.gimbal,
-                                      self._partly_seen(frame, b)) for b in blobs]
+                                      self._centroid_extra(frame, b)) for b in blobs]
         t3 = time.perf_counter()
         obs = np.array([[b.centroid_raw[0], b.centroid_raw[1], b.disparity] for b in blobs]).reshape(-1, 3)
         ids = self.tracker.update(frame.t, obs)
@@ -147,6 +149,16 @@ class Pipeline:
         pid = self.tracker.primary_id
         primary = next((d for d in dets if d.track_id == pid), None)
         return FrameResult(frame.index, frame.t, dets, pid, primary, ms, deferred)
+
+    def _centroid_extra(self, frame: StereoFrame, b: Blob) -> tuple[float, float]:
+        """The centroid's further 1-σ (px, x and y): where the target is seen in part, and where its outline
+        is drawn by warping (no temporal model at this pose: the cameras move; tracker.outline); in
+        quadrature, the two being independent."""
+        px, py = self._partly_seen(frame, b)
+        if self.subtractor.left_background(frame.gimbal) is None:
+            ox, oy = warped_outline_sigma_px(b.mask, self.outline)
+            px, py = float(np.hypot(px, ox)), float(np.hypot(py, oy))
+        return px, py
 
     def _partly_seen(self, frame: StereoFrame, b: Blob) -> tuple[float, float]:
         """The centroid's extra 1-σ (px, x and y) where the blob is cut by the image border or, while the
