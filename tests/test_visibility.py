@@ -77,7 +77,6 @@ def test_the_localizer_widens_only_the_cut_axis() -> None:
 
 
 def test_a_nearer_background_just_outside_a_tight_box_cuts_the_target() -> None:
-    box = (100, 100, 120, 160)
     mask = np.ones((60, 20), bool)  # the mask fills its box: no ring inside it
     mask[:, :2] = False
     mask[:, 2:4] = True
