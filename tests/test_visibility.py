@@ -107,3 +107,15 @@ def test_a_nearer_background_a_shadow_band_left_of_the_target_cuts_it() -> None:
     bg[:, 20:] = 5.0
     bg[:, 30:] = 15.0  # ... and one 10 columns off does not
     assert cut_sides(mask, box, SIZE, 9.0, bg, valid, CFG) == (0, 0)
+
+
+def test_the_shadow_band_of_a_nearer_bush_below_left_cuts_the_bottom() -> None:
+    box = (100, 100, 160, 220)
+    mask = _person(box, slice(10, 110))  # columns 20-39
+    mask[70:110, 20:34] = False  # the legs' left part hidden: only a 6-px strip goes on down
+    bg = np.full(mask.shape, 5.0, np.float32)
+    bg[70:, :24] = 19.0  # a bush at disparity 19 before the target at 9: the right camera misses 10 columns
+    valid = np.ones(mask.shape, bool)
+    assert cut_sides(mask, box, SIZE, 9.0, bg, valid, CFG)[1] == 1
+    bg[70:, :24] = 5.0
+    assert cut_sides(mask, box, SIZE, 9.0, bg, valid, CFG) == (0, 0)

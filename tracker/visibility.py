@@ -44,9 +44,10 @@ def cut_sides(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, int]
     rectified disparity is known (bg_disparity and bg_valid, (h, w) over the box; None: not known), at
     least min_share of the side's part of its 2-px ring outside the mask lies on a background nearer than
     the target by nearer_px (the ring split into sides about the mask's centroid, scaled by its extent).
-    On the left side the ring may lie a band away from the occluder: the right camera, d px to the left,
-    does not see the target over the d_near - d columns right of a nearer background at disparity d_near,
-    so the stereo outline stops there (the post of the occlusion scene: 5 px), and that band counts too.
+    The ring may lie a band away from the occluder: the right camera, d px to the left, does not see the
+    target over the d_near - d columns right of a nearer background at disparity d_near, so the stereo
+    outline stops there (the post of the occlusion scene: 5 px; the bush before a walker's legs on the
+    endless scene, 12 px, on the ring's bottom side too), and that band counts as hidden.
     mask: (h, w) over box (x0, y0, x1, y1), raw left pixels; size: the image's (width, height). Only the
     ring and band inside the box are looked at: pass the mask `padded`."""
     x0, y0, _, _ = box
@@ -62,9 +63,9 @@ def cut_sides(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, int]
         centre, half = (mom["m10"] / mom["m00"], mom["m01"] / mom["m00"]), (max(bw / 2.0, 1.0), max(bh / 2.0, 1.0))
         ring = _sides((cv2.dilate(m8, _RING) > 0) & ~mask, centre, half)  # the 2-px ring inside the box
         nearer = bg_valid & (bg_disparity > disparity + cfg.nearer_px)
-        hidden = [_right_shadow(nearer, bg_disparity, disparity), nearer, nearer, nearer]
+        hidden = _right_shadow(nearer, bg_disparity, disparity)
         for k, (ys, xs) in enumerate(ring):
-            cut[k] |= xs.size > 0 and int(np.count_nonzero(hidden[k][ys, xs])) >= cfg.min_share * xs.size
+            cut[k] |= xs.size > 0 and int(np.count_nonzero(hidden[ys, xs])) >= cfg.min_share * xs.size
     return int(cut[0]) + int(cut[1]), int(cut[2]) + int(cut[3])
 
 
