@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 from tracker.bgdepth import BackgroundDepth
 from tracker.bglearn import LearntBackground, Sighting, StreamLearnConfig, StreamLearner, changed_box
 from tracker.detect import DetectorConfig, StereoSubtractor, paint_masks
+from tracker.disparity_sigma import scatter_sigma
 from tracker.frames import StereoFrame
 from tracker.geometry import StereoRig
 from tracker.localize import Localization, Localizer
@@ -128,8 +129,8 @@ class Pipeline:
         blobs = without_duplicates(blobs)  # one object verified again from an overlapping box
         blobs = self.temporal.detect(frame, blobs, hints)  # cameras still: objects too near their background
         t2 = time.perf_counter()
-        locs = [self.localizer.locate(b.centroid_rect, b.disparity, b.disparity_sigma, b.area, frame.gimbal,
-                                      self._centroid_extra(frame, b)) for b in blobs]
+        locs = [self.localizer.locate(b.centroid_rect, b.disparity, self._disparity_sigma(frame, b), b.area,
+                                      frame.gimbal, self._centroid_extra(frame, b)) for b in blobs]
         t3 = time.perf_counter()
         obs = np.array([[b.centroid_raw[0], b.centroid_raw[1], b.disparity] for b in blobs]).reshape(-1, 3)
         ids = self.tracker.update(frame.t, obs)
@@ -149,6 +150,12 @@ class Pipeline:
         pid = self.tracker.primary_id
         primary = next((d for d in dets if d.track_id == pid), None)
         return FrameResult(frame.index, frame.t, dets, pid, primary, ms, deferred)
+
+    def _disparity_sigma(self, frame: StereoFrame, b: Blob) -> float:
+        """The disparity's 1-σ (px): the matcher's own, or the scatter of the disparities of the blob's
+        parts where larger (tracker.disparity_sigma: correlated residuals, interpolation, a slanted
+        surface; it includes the pixel noise the matcher's σ stands for)."""
+        return max(b.disparity_sigma, scatter_sigma(self.verifier.part_disparities(frame, b)))
 
     def _centroid_extra(self, frame: StereoFrame, b: Blob) -> tuple[float, float]:
         """The centroid's further 1-σ (px, x and y): where the target is seen in part, and where its outline
