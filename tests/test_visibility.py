@@ -8,7 +8,7 @@ import numpy as np
 from tracker.localize import Localizer
 from tracker.rectify import Rectifier
 from tracker.sim.rig import default_rig
-from tracker.visibility import VisibilityConfig, cut_sides, extra_sigma_px, padded
+from tracker.visibility import VisibilityConfig, cut_sides, extra_sigma_px, object_and_shadow, padded, with_objects
 
 CFG = VisibilityConfig()
 SIZE = (640, 480)
@@ -119,3 +119,24 @@ def test_the_shadow_band_of_a_nearer_bush_below_left_cuts_the_bottom() -> None:
     assert cut_sides(mask, box, SIZE, 9.0, bg, valid, CFG)[1] == 1
     bg[70:, :24] = 5.0
     assert cut_sides(mask, box, SIZE, 9.0, bg, valid, CFG) == (0, 0)
+
+
+def test_another_object_nearer_than_the_target_cuts_it_and_a_farther_one_does_not() -> None:
+    box = (100, 100, 160, 220)
+    mask = _person(box, slice(10, 110))  # columns 20-39
+    bg = np.full(mask.shape, 5.0, np.float32)
+    valid = np.ones(mask.shape, bool)
+    crosser = np.ones((100, 30), bool)  # another object, columns 50-79 of the box's frame, at disparity 20
+    at = (150, 105, 180, 205)
+    disp, ok = with_objects(bg, valid, box, [(at, crosser, 20.0)])
+    assert disp is not None and ok is not None
+    assert cut_sides(mask, box, SIZE, 9.0, disp, ok, CFG) == (0, 0)  # 10 columns off the target
+    # with its occlusion shadow, 20 - 5 = 15 columns to its left, it reaches the target's right side
+    disp, ok = with_objects(bg, valid, box, object_and_shadow(at, crosser, 20.0, 5.0))
+    assert disp is not None and ok is not None and disp[50, 35] == 20.0 and disp[50, 34] == 5.0
+    assert cut_sides(mask, box, SIZE, 9.0, disp, ok, CFG) == (1, 0)
+    disp, ok = with_objects(bg, valid, box, object_and_shadow(at, crosser, 4.0, 3.0))  # behind the target
+    assert cut_sides(mask, box, SIZE, 9.0, disp, ok, CFG) == (0, 0)
+    disp, ok = with_objects(None, None, box, object_and_shadow(at, crosser, 20.0, 5.0))  # cameras moving
+    assert cut_sides(mask, box, SIZE, 9.0, disp, ok, CFG) == (1, 0)
+    assert with_objects(None, None, box, [((300, 300, 310, 310), crosser, 20.0)]) == (None, None)

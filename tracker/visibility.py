@@ -69,6 +69,37 @@ def cut_sides(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, int]
     return int(cut[0]) + int(cut[1]), int(cut[2]) + int(cut[3])
 
 
+def with_objects(bg_disparity: F32 | None, bg_valid: BoolA | None, box: tuple[int, int, int, int],
+                 others: list[tuple[tuple[int, int, int, int], BoolA, float]]) -> tuple[F32 | None, BoolA | None]:
+    """The background's disparity over box (None: not known) with the other objects found this frame
+    painted over it (box, mask and disparity each; `object_and_shadow`): a target passing before another
+    hides it as a nearer background does (two-targets: the crosser at 5 m before the target at 10 m, whose
+    outline stopped at the crosser's shadow and put its centroid 8 px off). None, None without either."""
+    x0, y0, x1, y1 = box
+    near = [(o, m, d) for o, m, d in others if o[0] < x1 and x0 < o[2] and o[1] < y1 and y0 < o[3]]
+    if not near:
+        return bg_disparity, bg_valid
+    disp = np.zeros((y1 - y0, x1 - x0), np.float32) if bg_disparity is None else bg_disparity.copy()
+    valid = np.zeros(disp.shape, bool) if bg_valid is None else bg_valid.copy()
+    for (ox0, oy0, ox1, oy1), m, d in near:
+        X0, Y0, X1, Y1 = max(ox0, x0), max(oy0, y0), min(ox1, x1), min(oy1, y1)
+        sub = m[Y0 - oy0:Y1 - oy0, X0 - ox0:X1 - ox0]
+        dv, vv = disp[Y0 - y0:Y1 - y0, X0 - x0:X1 - x0], valid[Y0 - y0:Y1 - y0, X0 - x0:X1 - x0]
+        dv[sub] = np.maximum(np.where(vv[sub], dv[sub], 0.0), d)
+        vv[sub] = True
+    return disp, valid
+
+
+def object_and_shadow(box: tuple[int, int, int, int], mask: BoolA, disparity: float, bg_disparity: float
+                      ) -> list[tuple[tuple[int, int, int, int], BoolA, float]]:
+    """Another object for `with_objects`: its mask, and the mask again shifted left by its disparity less
+    its background's, its occlusion shadow, which verification takes from the box as that object's
+    (tracker.verify), so that a target behind it goes on unseen there too."""
+    s = int(round(max(disparity - bg_disparity, 0.0)))
+    x0, y0, x1, y1 = box
+    return [(box, mask, disparity), ((x0 - s, y0, x1 - s, y1), mask, disparity)]
+
+
 def _right_shadow(nearer: BoolA, bg_disparity: F32, disparity: float) -> BoolA:
     """The nearer background and, right of it, the columns the right camera does not see the target in:
     up to d_near - d px (d_near the nearer background's largest disparity in the box, d the target's)."""
