@@ -53,8 +53,11 @@ def test_a_nearer_background_below_cuts_a_target_and_a_farther_one_does_not() ->
     valid = np.ones(mask.shape, bool)
     assert cut_sides(mask, box, SIZE, 9.0, bg, valid, CFG) == (0, 1)
     assert cut_sides(mask, box, SIZE, 9.0, bg, np.zeros(mask.shape, bool), CFG) == (0, 0)  # not known there
-    bg[70:] = 9.2  # within nearer_px of the target: the ground it stands on, not an occluder
+    bg[70:] = 9.2  # within nearer_px of the target: the ground it stands on, not an occluder ...
+    bg[60:70] = 8.8  # ... which runs on behind its feet (no step in the background at the outline)
     assert cut_sides(mask, box, SIZE, 9.0, bg, valid, CFG) == (0, 0)
+    bg[60:70] = 5.0  # a step from far behind the target to slightly before it: a low wall
+    assert cut_sides(mask, box, SIZE, 9.0, bg, valid, CFG) == (0, 1)
 
 
 def test_the_extra_sigma_is_kappa_times_the_visible_extent_per_cut_side() -> None:
@@ -140,3 +143,18 @@ def test_another_object_nearer_than_the_target_cuts_it_and_a_farther_one_does_no
     disp, ok = with_objects(None, None, box, object_and_shadow(at, crosser, 20.0, 5.0))  # cameras moving
     assert cut_sides(mask, box, SIZE, 9.0, disp, ok, CFG) == (1, 0)
     assert with_objects(None, None, box, [((300, 300, 310, 310), crosser, 20.0)]) == (None, None)
+
+
+def test_a_hedge_slightly_nearer_cuts_where_the_background_steps_and_the_ground_does_not() -> None:
+    box = (100, 100, 160, 220)
+    mask = _person(box, slice(10, 70))  # the legs hidden from row 70 of the box on
+    valid = np.ones(mask.shape, bool)
+    bg = np.full(mask.shape, 3.0, np.float32)  # a far wall behind the target (disparity 7 px)
+    bg[70:] = 7.4  # a hedge 0.4 px nearer than the target: under nearer_px
+    assert cut_sides(mask, box, SIZE, 7.0, bg, valid, CFG) == (0, 1)
+    rows = np.arange(mask.shape[0], dtype=np.float32)[:, None]
+    ground = np.broadcast_to(7.0 + 0.2 * (rows - 69.0), mask.shape).astype(np.float32)
+    assert cut_sides(mask, box, SIZE, 7.0, ground, valid, CFG) == (0, 0)  # the ground the target stands on
+    no_jump = bg.copy()
+    no_jump[:70] = 6.5  # the background just behind the outline is not much farther: no step
+    assert cut_sides(mask, box, SIZE, 7.0, no_jump, valid, CFG) == (0, 0)

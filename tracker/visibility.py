@@ -27,13 +27,20 @@ class VisibilityConfig:
     much larger (px) the background's disparity must be than the target's for it to hide the target (the
     ground just before a target's feet rises about b / h = 0.2 px a row for a rig 1.5 m above it, so it
     stays under this for the 2 rows of the ring; a solid body's front foot nearer than its centroid may not:
-    a jump test against the background just inside the outline was tried and, on the endless scene, missed
-    the hedge before people's legs: elevation within 1σ 0.34 -> 0.19); min_share: the share of a side's
-    ring pixels that must be hidden for it to count."""
+    a jump test against the background just inside the outline was tried in its place and, on the endless
+    scene, missed the hedge before people's legs: elevation within 1σ 0.34 -> 0.19); min_share: the share
+    of a side's ring pixels that must be hidden for it to count. slightly_px, jump_px: a side whose ring is
+    nearer than the target by slightly_px only (a hedge 0.5-1.5 m before a walker at 25 m: 0.15-0.5 px) is cut
+    as well where the background just inside the outline on that side lies farther than the target by
+    jump_px: the background steps there from behind the target to before it, as it does at an occluder's
+    edge and not under a target's feet (the ground behind the feet's lowest rows is within 0.2 px a row of
+    the target's own disparity)."""
 
     kappa: float = 0.4
     nearer_px: float = 0.5
     min_share: float = 0.3
+    slightly_px: float = 0.1
+    jump_px: float = 1.0
 
 
 def cut_sides(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, int], disparity: float,
@@ -44,7 +51,9 @@ def cut_sides(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, int]
     rectified disparity is known (bg_disparity and bg_valid, (h, w) over the box; None: not known), at
     least min_share of the side's part of its 2-px ring outside the mask lies on a background nearer than
     the target by nearer_px (the ring split into sides about the mask's centroid, scaled by its extent).
-    The ring may lie a band away from the occluder: the right camera, d px to the left, does not see the
+    Or at least min_share of it lies on a background nearer by slightly_px and of the outline's rim on
+    that side on a background farther by jump_px (VisibilityConfig). The ring may lie a band away from the
+    occluder: the right camera, d px to the left, does not see the
     target over the d_near - d columns right of a nearer background at disparity d_near, so the stereo
     outline stops there (the post of the occlusion scene: 5 px; the bush before a walker's legs on the
     endless scene, 12 px, on the ring's bottom side too), and that band counts as hidden.
@@ -62,10 +71,16 @@ def cut_sides(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, int]
         mom = cv2.moments(m8, binaryImage=True)
         centre, half = (mom["m10"] / mom["m00"], mom["m01"] / mom["m00"]), (max(bw / 2.0, 1.0), max(bh / 2.0, 1.0))
         ring = _sides((cv2.dilate(m8, _RING) > 0) & ~mask, centre, half)  # the 2-px ring inside the box
+        edge = _sides(mask & (cv2.erode(m8, _RING) == 0), centre, half)  # the outline's own 2-px rim
         nearer = bg_valid & (bg_disparity > disparity + cfg.nearer_px)
         hidden = _right_shadow(nearer, bg_disparity, disparity)
-        for k, (ys, xs) in enumerate(ring):
-            cut[k] |= xs.size > 0 and int(np.count_nonzero(hidden[ys, xs])) >= cfg.min_share * xs.size
+        slightly = bg_valid & (bg_disparity > disparity + cfg.slightly_px)
+        behind = bg_valid & (bg_disparity < disparity - cfg.jump_px)
+        for k, ((ys, xs), (ey, ex)) in enumerate(zip(ring, edge, strict=True)):
+            need = cfg.min_share * xs.size
+            cut[k] |= xs.size > 0 and int(np.count_nonzero(hidden[ys, xs])) >= need
+            cut[k] |= (xs.size > 0 and int(np.count_nonzero(slightly[ys, xs])) >= need
+                       and int(np.count_nonzero(behind[ey, ex])) >= cfg.min_share * ex.size)
     return int(cut[0]) + int(cut[1]), int(cut[2]) + int(cut[3])
 
 
