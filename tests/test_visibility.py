@@ -155,6 +155,11 @@ def test_a_hedge_slightly_nearer_cuts_where_the_background_steps_and_the_ground_
     rows = np.arange(mask.shape[0], dtype=np.float32)[:, None]
     ground = np.broadcast_to(7.0 + 0.2 * (rows - 69.0), mask.shape).astype(np.float32)
     assert cut_sides(mask, box, SIZE, 7.0, ground, valid, CFG) == (0, 0)  # the ground the target stands on
+    bg[70:] = 6.7  # a hedge as far as the target, within level_px: the target may go on into it unseen
+    assert cut_sides(mask, box, SIZE, 7.0, bg, valid, CFG) == (0, 1)
+    bg[70:] = 6.2  # a background well behind the target below it: seen, not hidden
+    assert cut_sides(mask, box, SIZE, 7.0, bg, valid, CFG) == (0, 0)
+    bg[70:] = 7.4
     no_jump = bg.copy()
     no_jump[:70] = 6.5  # the background just behind the outline is not much farther: no step
     assert cut_sides(mask, box, SIZE, 7.0, no_jump, valid, CFG) == (0, 0)
