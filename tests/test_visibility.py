@@ -8,7 +8,7 @@ import numpy as np
 from tracker.localize import Localizer
 from tracker.rectify import Rectifier
 from tracker.sim.rig import default_rig
-from tracker.visibility import VisibilityConfig, cut_sides, extra_sigma_px
+from tracker.visibility import VisibilityConfig, cut_sides, extra_sigma_px, object_and_shadow, padded, with_objects
 
 CFG = VisibilityConfig()
 SIZE = (640, 480)
@@ -53,8 +53,11 @@ def test_a_nearer_background_below_cuts_a_target_and_a_farther_one_does_not() ->
     valid = np.ones(mask.shape, bool)
     assert cut_sides(mask, box, SIZE, 9.0, bg, valid, CFG) == (0, 1)
     assert cut_sides(mask, box, SIZE, 9.0, bg, np.zeros(mask.shape, bool), CFG) == (0, 0)  # not known there
-    bg[70:] = 9.2  # within nearer_px of the target: the ground it stands on, not an occluder
+    bg[70:] = 9.2  # within nearer_px of the target: the ground it stands on, not an occluder ...
+    bg[60:70] = 8.8  # ... which runs on behind its feet (no step in the background at the outline)
     assert cut_sides(mask, box, SIZE, 9.0, bg, valid, CFG) == (0, 0)
+    bg[60:70] = 5.0  # a step from far behind the target to slightly before it: a low wall
+    assert cut_sides(mask, box, SIZE, 9.0, bg, valid, CFG) == (0, 1)
 
 
 def test_the_extra_sigma_is_kappa_times_the_visible_extent_per_cut_side() -> None:
@@ -74,3 +77,89 @@ def test_the_localizer_widens_only_the_cut_axis() -> None:
     assert cut.sigma_phi > 20 * plain.sigma_phi
     assert np.isclose(cut.sigma_phi, 24.0 / 600.0, rtol=0.1)  # 24 px at f = 600 px, in radians
     assert np.isclose(cut.sigma_theta, plain.sigma_theta, rtol=0.05)
+
+
+def test_a_nearer_background_just_outside_a_tight_box_cuts_the_target() -> None:
+    mask = np.ones((60, 20), bool)  # the mask fills its box: no ring inside it
+    mask[:, :2] = False
+    mask[:, 2:4] = True
+    m2, b2 = padded(mask[:, 2:], (102, 100, 120, 160), SIZE)
+    assert b2 == (100, 98, 122, 162) and m2.shape == (64, 22) and m2[2:62, 2:20].all() and not m2[:, :2].any()
+    bg = np.full(m2.shape, 5.0, np.float32)
+    bg[:, :2] = 14.0  # a post nearer than the target (disparity 9 px) just left of it
+    valid = np.ones(m2.shape, bool)
+    assert cut_sides(mask[:, 2:], (102, 100, 120, 160), SIZE, 9.0, bg[2:62, 2:20], valid[2:62, 2:20], CFG) == (0, 0)
+    assert cut_sides(m2, b2, SIZE, 9.0, bg, valid, CFG) == (1, 0)
+    assert padded(mask, (0, 0, 20, 60), SIZE)[1] == (0, 0, 22, 62)  # clipped to the image
+
+
+def test_a_nearer_background_a_shadow_band_left_of_the_target_cuts_it() -> None:
+    box = (100, 100, 140, 160)
+    mask = np.zeros((60, 40), bool)
+    mask[:, 20:40] = True
+    bg = np.full(mask.shape, 5.0, np.float32)
+    bg[:, :14] = 15.0  # a post at disparity 15 before a target at 9: the right camera misses 6 columns
+    valid = np.ones(mask.shape, bool)
+    assert cut_sides(mask, box, SIZE, 9.0, bg, valid, CFG) == (1, 0)
+    bg[:, :14] = 12.0  # nearer by 3 px only: its shadow ends 3 columns short of the ring
+    assert cut_sides(mask, box, SIZE, 9.0, bg, valid, CFG) == (0, 0)
+    mask[:, 20:40], mask[:, 0:20] = False, True
+    bg[:, :] = 5.0
+    bg[:, 20:] = 15.0  # the same post right of the target hides it with no band between
+    assert cut_sides(mask, box, SIZE, 9.0, bg, valid, CFG) == (1, 0)
+    bg[:, 20:] = 5.0
+    bg[:, 30:] = 15.0  # ... and one 10 columns off does not
+    assert cut_sides(mask, box, SIZE, 9.0, bg, valid, CFG) == (0, 0)
+
+
+def test_the_shadow_band_of_a_nearer_bush_below_left_cuts_the_bottom() -> None:
+    box = (100, 100, 160, 220)
+    mask = _person(box, slice(10, 110))  # columns 20-39
+    mask[70:110, 20:34] = False  # the legs' left part hidden: only a 6-px strip goes on down
+    bg = np.full(mask.shape, 5.0, np.float32)
+    bg[70:, :24] = 19.0  # a bush at disparity 19 before the target at 9: the right camera misses 10 columns
+    valid = np.ones(mask.shape, bool)
+    assert cut_sides(mask, box, SIZE, 9.0, bg, valid, CFG)[1] == 1
+    bg[70:, :24] = 5.0
+    assert cut_sides(mask, box, SIZE, 9.0, bg, valid, CFG) == (0, 0)
+
+
+def test_another_object_nearer_than_the_target_cuts_it_and_a_farther_one_does_not() -> None:
+    box = (100, 100, 160, 220)
+    mask = _person(box, slice(10, 110))  # columns 20-39
+    bg = np.full(mask.shape, 5.0, np.float32)
+    valid = np.ones(mask.shape, bool)
+    crosser = np.ones((100, 30), bool)  # another object, columns 50-79 of the box's frame, at disparity 20
+    at = (150, 105, 180, 205)
+    disp, ok = with_objects(bg, valid, box, [(at, crosser, 20.0)])
+    assert disp is not None and ok is not None
+    assert cut_sides(mask, box, SIZE, 9.0, disp, ok, CFG) == (0, 0)  # 10 columns off the target
+    # with its occlusion shadow, 20 - 5 = 15 columns to its left, it reaches the target's right side
+    disp, ok = with_objects(bg, valid, box, object_and_shadow(at, crosser, 20.0, 5.0))
+    assert disp is not None and ok is not None and disp[50, 35] == 20.0 and disp[50, 34] == 5.0
+    assert cut_sides(mask, box, SIZE, 9.0, disp, ok, CFG) == (1, 0)
+    disp, ok = with_objects(bg, valid, box, object_and_shadow(at, crosser, 4.0, 3.0))  # behind the target
+    assert cut_sides(mask, box, SIZE, 9.0, disp, ok, CFG) == (0, 0)
+    disp, ok = with_objects(None, None, box, object_and_shadow(at, crosser, 20.0, 5.0))  # cameras moving
+    assert cut_sides(mask, box, SIZE, 9.0, disp, ok, CFG) == (1, 0)
+    assert with_objects(None, None, box, [((300, 300, 310, 310), crosser, 20.0)]) == (None, None)
+
+
+def test_a_hedge_slightly_nearer_cuts_where_the_background_steps_and_the_ground_does_not() -> None:
+    box = (100, 100, 160, 220)
+    mask = _person(box, slice(10, 70))  # the legs hidden from row 70 of the box on
+    valid = np.ones(mask.shape, bool)
+    bg = np.full(mask.shape, 3.0, np.float32)  # a far wall behind the target (disparity 7 px)
+    bg[70:] = 7.4  # a hedge 0.4 px nearer than the target: under nearer_px
+    assert cut_sides(mask, box, SIZE, 7.0, bg, valid, CFG) == (0, 1)
+    rows = np.arange(mask.shape[0], dtype=np.float32)[:, None]
+    ground = np.broadcast_to(7.0 + 0.2 * (rows - 69.0), mask.shape).astype(np.float32)
+    assert cut_sides(mask, box, SIZE, 7.0, ground, valid, CFG) == (0, 0)  # the ground the target stands on
+    bg[70:] = 6.7  # a hedge as far as the target, within level_px: the target may go on into it unseen
+    assert cut_sides(mask, box, SIZE, 7.0, bg, valid, CFG) == (0, 1)
+    bg[70:] = 6.2  # a background well behind the target below it: seen, not hidden
+    assert cut_sides(mask, box, SIZE, 7.0, bg, valid, CFG) == (0, 0)
+    bg[70:] = 7.4
+    no_jump = bg.copy()
+    no_jump[:70] = 6.5  # the background just behind the outline is not much farther: no step
+    assert cut_sides(mask, box, SIZE, 7.0, no_jump, valid, CFG) == (0, 0)

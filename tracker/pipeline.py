@@ -16,18 +16,21 @@ from numpy.typing import NDArray
 
 from tracker.bgdepth import BackgroundDepth
 from tracker.bglearn import LearntBackground, Sighting, StreamLearnConfig, StreamLearner, changed_box
-from tracker.detect import DetectorConfig, StereoSubtractor, paint_masks
+from tracker.detect import Box, DetectorConfig, StereoSubtractor, paint_masks
+from tracker.disparity_sigma import scatter_sigma
 from tracker.frames import StereoFrame
 from tracker.geometry import StereoRig
 from tracker.localize import Localization, Localizer
+from tracker.outline import OutlineConfig, warped_outline_sigma_px
 from tracker.rectify import Rectifier
 from tracker.schedule import VerifySchedule
 from tracker.temporal import TemporalConfig, TemporalDetector, without_duplicates
 from tracker.tracks import MultiTracker, TrackerConfig
 from tracker.verify import Blob, Verifier
-from tracker.visibility import VisibilityConfig, cut_sides, extra_sigma_px
+from tracker.visibility import VisibilityConfig, cut_sides, extra_sigma_px, object_and_shadow, padded, with_objects
 
 F64 = NDArray[np.float64]
+BoolA = NDArray[np.bool_]
 STAGES = ("candidates", "verify", "localize", "track")
 
 
@@ -79,6 +82,7 @@ class Pipeline:
         self.tracker = MultiTracker(tracker)
         self.schedule = VerifySchedule(verify_budget_ms)
         self.visibility = VisibilityConfig()
+        self.outline = OutlineConfig()
         self._last_gain = 1.0
         self.learner: StreamLearner | None = None
 
@@ -126,8 +130,8 @@ class Pipeline:
         blobs = without_duplicates(blobs)  # one object verified again from an overlapping box
         blobs = self.temporal.detect(frame, blobs, hints)  # cameras still: objects too near their background
         t2 = time.perf_counter()
-        locs = [self.localizer.locate(b.centroid_rect, b.disparity, b.disparity_sigma, b.area, frame.gimbal,
-                                      self._partly_seen(frame, b)) for b in blobs]
+        locs = [self.localizer.locate(b.centroid_rect, b.disparity, self._disparity_sigma(frame, b), b.area,
+                                      frame.gimbal, self._centroid_extra(frame, b, blobs)) for b in blobs]
         t3 = time.perf_counter()
         obs = np.array([[b.centroid_raw[0], b.centroid_raw[1], b.disparity] for b in blobs]).reshape(-1, 3)
         ids = self.tracker.update(frame.t, obs)
@@ -148,12 +152,32 @@ class Pipeline:
         primary = next((d for d in dets if d.track_id == pid), None)
         return FrameResult(frame.index, frame.t, dets, pid, primary, ms, deferred)
 
-    def _partly_seen(self, frame: StereoFrame, b: Blob) -> tuple[float, float]:
-        """The centroid's extra 1-σ (px, x and y) where the blob is cut by the image border or, while the
-        cameras are still (its correspondence map is kept), by a nearer background (tracker.visibility)."""
-        cm = None if self.subtractor.moving else self.subtractor.correspondence(0, frame.gimbal, b.box)
-        cut = cut_sides(b.mask, b.box, self.rig.left.size, b.disparity, None if cm is None else cm.disparity,
-                        None if cm is None else cm.valid, self.visibility)
+    def _disparity_sigma(self, frame: StereoFrame, b: Blob) -> float:
+        """The disparity's 1-σ (px): the matcher's own, or the scatter of the disparities of the blob's
+        parts where larger (tracker.disparity_sigma: correlated residuals, interpolation, a slanted
+        surface; it includes the pixel noise the matcher's σ stands for)."""
+        return max(b.disparity_sigma, scatter_sigma(self.verifier.part_disparities(frame, b)))
+
+    def _centroid_extra(self, frame: StereoFrame, b: Blob, blobs: list[Blob]) -> tuple[float, float]:
+        """The centroid's further 1-σ (px, x and y): where the target is seen in part, and where its outline
+        is drawn by warping (no temporal model at this pose: the cameras move; tracker.outline); in
+        quadrature, the two being independent."""
+        others = [e for o in blobs if o is not b for e in object_and_shadow(o.box, o.mask, o.disparity, o.bg_disparity)]
+        px, py = self._partly_seen(frame, b, others)
+        if self.subtractor.left_background(frame.gimbal) is None:
+            ox, oy = warped_outline_sigma_px(b.mask, self.outline)
+            px, py = float(np.hypot(px, ox)), float(np.hypot(py, oy))
+        return px, py
+
+    def _partly_seen(self, frame: StereoFrame, b: Blob, others: list[tuple[Box, BoolA, float]]
+                     ) -> tuple[float, float]:
+        """The centroid's extra 1-σ (px, x and y) where the blob is cut by the image border, by another
+        object found this frame (others: box, mask, disparity) or, while the cameras are still (its
+        correspondence map is kept), by a nearer background (tracker.visibility)."""
+        mask, box = padded(b.mask, b.box, self.rig.left.size, left=2 + int(np.ceil(max(b.disparity, 0.0))))
+        cm = None if self.subtractor.moving else self.subtractor.correspondence(0, frame.gimbal, box)
+        disp, valid = with_objects(None if cm is None else cm.disparity, None if cm is None else cm.valid, box, others)
+        cut = cut_sides(mask, box, self.rig.left.size, b.disparity, disp, valid, self.visibility)
         return extra_sigma_px(b.mask, cut, self.visibility) if any(cut) else (0.0, 0.0)
 
     def _foreground_low(self, blobs: list[Blob]) -> NDArray[np.uint8] | None:

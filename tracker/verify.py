@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 
 from tracker.bgdepth import CorrespondenceMap
 from tracker.detect import Box, StereoSubtractor
+from tracker.disparity_sigma import grid_parts
 from tracker.frames import StereoFrame
 from tracker.rectify import Rectifier
 from tracker.regions import background_disparity, mask_centroid, nearest_hint, row_thirds
@@ -243,6 +244,18 @@ class Verifier:
             if fine is not None and strips is not None:
                 return None if strips.clipped and fine.disparity > strips.d_hi - 2.0 else fine
         return None
+
+    def part_disparities(self, frame: StereoFrame, blob: Blob) -> list[float]:
+        """The disparities (px) of the parts of a verified blob (tracker.disparity_sigma.grid_parts about
+        the centre of the window `match_object` uses), each refined from the blob's own on the same strips;
+        the parts that do not match are left out."""
+        strips = self._strips(frame, blob.box, blob.mask, blob.disparity)
+        if strips is None:
+            return []
+        bx, by, bw, bh = cv2.boundingRect(blob.mask.view(np.uint8))
+        fits = (strips.match(p, blob.disparity, 1) for p in grid_parts(blob.mask, (bx + bw / 2.0, by + bh / 2.0),
+                                                                        _MATCH_HALF))
+        return [f.disparity for f in fits if f is not None]
 
     def _outline_stereo(self, frame: StereoFrame, box: Box, m_left: BoolA,
                         d_hint: float | None) -> tuple[BoolA, BoolA, float] | None:
