@@ -4,21 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from tracker.disparity_sigma import COLUMNS, MIN_PARTS, ROWS, grid_parts, scatter_sigma
+from tracker.disparity_sigma import COLUMNS, MIN_PARTS, ROWS, part_disparities, scatter_sigma
 from tracker.stereo import refine_region
-
-
-def test_the_parts_tile_the_window_and_leave_the_rest_out() -> None:
-    mask = np.zeros((100, 120), bool)
-    mask[10:90, 20:100] = True  # 80 x 80 px, larger than the 48 x 32 window
-    parts = grid_parts(mask, (60.0, 50.0), (24, 16))
-    assert len(parts) == COLUMNS * ROWS
-    union = np.logical_or.reduce(parts)
-    assert union.sum() == 48 * 32 and union[34:66, 36:84].all()
-    assert sum(int(p.sum()) for p in parts) == 48 * 32  # no pixel in two parts
-    small = np.zeros((40, 40), bool)
-    small[10:30, 12:28] = True  # smaller than the window: the parts tile the mask
-    assert np.logical_or.reduce(grid_parts(small, (20.0, 20.0), (24, 16))).sum() == small.sum()
 
 
 def test_the_sigma_is_the_standard_error_of_the_parts_mean() -> None:
@@ -41,16 +28,36 @@ def _pair(slope: float) -> tuple[np.ndarray, np.ndarray]:
     return left.clip(0, 255).astype(np.uint8), right.clip(0, 255).astype(np.uint8)
 
 
+def test_each_part_is_refined_as_refine_region_refines_it_alone() -> None:
+    left, right = _pair(0.02)  # 0.02 px a column: the parts' disparities differ
+    core = np.ones((40, 48), np.uint8)  # rows 40..80, columns 56..104 of the images
+    ours = part_disparities(left[40:80], right[40:80], core, 56, 10.0, 0.8)
+    alone = []
+    for r in range(ROWS):
+        for c in range(COLUMNS):
+            fit = refine_region(left, right, np.ones((40 // ROWS, 48 // COLUMNS), np.uint8), 56 + c * 48 // COLUMNS,
+                                40 + r * 40 // ROWS, 10.0, min_score=0.8)
+            assert fit is not None
+            alone.append(fit.disparity)
+    assert np.allclose(ours, alone, atol=0.005)
+
+
 def test_the_parts_of_a_slanted_surface_disagree_and_of_a_flat_one_agree() -> None:
-    def sigma(slope: float) -> float:
+    def parts(slope: float) -> list[float]:
         left, right = _pair(slope)
-        mask = np.zeros((40, 60), bool)
-        mask[:, :] = True
-        ds = []
-        for p in grid_parts(mask, (30.0, 20.0), (24, 16)):
-            fit = refine_region(left, right, p, 50, 40, 10.0)
-            if fit is not None:
-                ds.append(fit.disparity)
-        return scatter_sigma(ds)
-    flat, slanted = sigma(0.0), sigma(0.02)  # 0.02 px a column: 1 px over the 48-px window
-    assert flat < 0.02 and slanted > 5 * flat and slanted > 0.05
+        return part_disparities(left[40:80], right[40:80], np.ones((40, 48), np.uint8), 56, 10.0, 0.8)
+    flat, slanted = parts(0.0), parts(0.02)
+    assert len(flat) == len(slanted) == COLUMNS * ROWS
+    assert np.allclose(flat, 10.0, atol=0.02)
+    assert scatter_sigma(flat) < 0.01 and scatter_sigma(slanted) > 5 * scatter_sigma(flat)
+    assert scatter_sigma(slanted) > 0.05
+
+
+def test_parts_without_texture_or_pixels_are_left_out() -> None:
+    left, right = _pair(0.0)
+    core = np.ones((40, 48), np.uint8)
+    core[:, :12] = 0  # the first column of parts has no pixels
+    flat = left[40:80].copy()
+    flat[:20] = 128  # the top row of parts has no texture
+    assert len(part_disparities(flat, right[40:80], core, 56, 10.0, 0.8)) == COLUMNS - 1
+    assert part_disparities(left[40:80], right[40:80], core, 2, 10.0, 0.8) == []  # the strip ends

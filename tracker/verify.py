@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 
 from tracker.bgdepth import CorrespondenceMap
 from tracker.detect import Box, StereoSubtractor
-from tracker.disparity_sigma import grid_parts
+from tracker.disparity_sigma import part_disparities
 from tracker.frames import StereoFrame
 from tracker.rectify import Rectifier
 from tracker.regions import background_disparity, mask_centroid, nearest_hint, row_thirds
@@ -246,16 +246,14 @@ class Verifier:
         return None
 
     def part_disparities(self, frame: StereoFrame, blob: Blob) -> list[float]:
-        """The disparities (px) of the parts of a verified blob (tracker.disparity_sigma.grid_parts about
-        the centre of the window `match_object` uses), each refined from the blob's own on the same strips;
-        the parts that do not match are left out."""
+        """The disparities (px) of the parts of a verified blob (tracker.disparity_sigma.part_disparities:
+        the window `match_object` uses cut into a grid, each part one Gauss-Newton step from the blob's
+        disparity on the same strips); the parts that do not match are left out."""
         strips = self._strips(frame, blob.box, blob.mask, blob.disparity)
         if strips is None:
             return []
-        bx, by, bw, bh = cv2.boundingRect(blob.mask.view(np.uint8))
-        fits = (strips.match(p, blob.disparity, 1) for p in grid_parts(blob.mask, (bx + bw / 2.0, by + bh / 2.0),
-                                                                        _MATCH_HALF))
-        return [f.disparity for f in fits if f is not None]
+        return part_disparities(strips.left, strips.right, strips.core(blob.mask), strips.off, blob.disparity,
+                                _MIN_SCORE)
 
     def _outline_stereo(self, frame: StereoFrame, box: Box, m_left: BoolA,
                         d_hint: float | None) -> tuple[BoolA, BoolA, float] | None:
@@ -353,9 +351,9 @@ class _Strips:
     d_hi: int
     clipped: bool = False  # the image's left edge cut the search range short
 
-    def match(self, region: BoolA, d0: float | None, radius: int) -> RegionMatch | None:
-        """One disparity for the region (raw-left mask with its box's origin), mask-weighted, shrunk by
-        about a pixel so that no background next to the outline enters the match."""
+    def core(self, region: BoolA) -> U8:
+        """The region (raw-left mask with its box's origin) over the rectified window, (h, n) uint8 0/1,
+        shrunk by about a pixel so that no background next to the outline enters a match."""
         x0, y0 = self.origin
         rx0, ry0, rx1, ry1 = self.window
         mx, my = self.rect.maps[0]
@@ -363,9 +361,15 @@ class _Strips:
         mmy = my[ry0:ry1, rx0:rx1] - np.float32(y0)
         wgt = cv2.remap(region.astype(np.float32), mmx, mmy, cv2.INTER_LINEAR,
                         borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
-        core = cv2.erode((wgt > 0.99).astype(np.uint8), _CORE)
+        core = np.asarray(cv2.erode((wgt > 0.99).astype(np.uint8), _CORE), np.uint8)
         if int(np.count_nonzero(core)) < 8:
             core = (wgt > 0.5).astype(np.uint8)
+        return core
+
+    def match(self, region: BoolA, d0: float | None, radius: int) -> RegionMatch | None:
+        """One disparity for the region (raw-left mask with its box's origin), mask-weighted, shrunk by
+        about a pixel so that no background next to the outline enters the match."""
+        core = self.core(region)
         if d0 is not None:  # a good prior: refine from it, search around it only if that fails
             fit = refine_region(self.left, self.right, core, self.off, 0, d0, min_score=_MIN_SCORE)
             if fit is not None:
