@@ -336,6 +336,10 @@ class SimRig:
             cents.append(np.array([m["m10"] / m["m00"] + x0, m["m01"] / m["m00"] + y0])
                          if m["m00"] > 0 else None)
         expected = obj.area_m2 * (self.rig.left.f / max(rig_p[2], 0.1)) ** 2
-        near = obj.near_depth_m(t, R_wr @ self.rig.left.c) if isinstance(obj, BodyObject) else 0.0
+        near, surface = 0.0, None
+        if isinstance(obj, BodyObject):
+            near = obj.near_depth_m(t, R_wr @ self.rig.left.c)
+            seen = self.renderer.surface_mean(0, ids[0], tid)
+            surface = None if seen is None else R_wr @ seen
         return TargetTruth(tid, world, rig_p, pl, pr, cents[0], cents[1], areas[0],
-                           min(areas[0] / expected, 1.0), areas[1], near)
+                           min(areas[0] / expected, 1.0), areas[1], near, surface)
