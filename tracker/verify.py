@@ -19,7 +19,8 @@ from tracker.bgdepth import CorrespondenceMap
 from tracker.detect import Box, StereoSubtractor
 from tracker.frames import StereoFrame
 from tracker.rectify import Rectifier
-from tracker.regions import background_disparity, mask_centroid, nearest_hint, row_thirds
+from tracker.regions import background_disparity, hints_around, mask_centroid, nearest_hint, row_thirds
+from tracker.split import own_pixels
 from tracker.stereo import RegionMatch, match_region, refine_region
 
 U8 = NDArray[np.uint8]
@@ -167,8 +168,9 @@ class Verifier:
             if n_left < min_area:
                 break
             hint = nearest_hint(hints, m_left, box)
+            around = hints_around(hints, m_left, box)
             got = None if self._too_small_to_be_new(n_left, hint) else self._verify_region(frame, box, cm, m_left,
-                                                                                          hint, free)
+                                                                                          hint, free, around)
             if got is None:
                 m_raw = m_raw & ~m_left  # not an object: try what else the box holds
                 continue
@@ -190,10 +192,14 @@ class Verifier:
         return self.sub.moving and hint is None and area < cfg.moving_min_cells * cfg.stride * cfg.stride
 
     def _verify_region(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap, m_left: BoolA,
-                       d_hint: float | None, free: BoolA) -> tuple[Blob, BoolA | None] | None:
+                       d_hint: float | None, free: BoolA, around: list[float] | None = None
+                       ) -> tuple[Blob, BoolA | None] | None:
         """Verify one connected region of the left-key mask inside a box. Returns the blob and, with the
-        cameras still, the box's pixels unlike the temporal background (|Γ - g B| > ε + 3 g D)."""
+        cameras still, the box's pixels unlike the temporal background (|Γ - g B| > ε + 3 g D).
+        around: the predicted disparities of the tracks about the region (regions.hints_around); with more
+        than one, a tracked object's outline keeps only its pixels that match best at its own (tracker.split)."""
         cfg = self.cfg
+        around = around or []
         x0, y0, x1, y1 = box
         gain, changed = 1.0, None
         model = self.sub.left_background(frame.gimbal)
@@ -204,6 +210,8 @@ class Verifier:
             obj, gain, changed = temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1],
                                                    dev[y0:y1, x0:x1], np.zeros_like(m_left), m_left & free,
                                                    cfg.epsilon)
+            if len(around) > 1:  # other tracks predicted about the region: keep the pixels at this one's d
+                obj = own_pixels(self.rect, frame, box, obj, d_hint, around, cfg.min_area_px)
             d0 = d_hint
         else:
             # a new object, or the cameras move: verification by warping in both directions

@@ -1,0 +1,81 @@
+"""Pixels of a joint outline assigned to the disparity they match at (tracker.split, issue 12 item 2)."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from tracker.frames import StereoFrame
+from tracker.geometry import Camera, StereoRig
+from tracker.rectify import Rectifier
+from tracker.regions import hints_around
+from tracker.split import match_cost, own_pixels
+
+W, H = 640, 480
+D_NEAR, D_FAR, D_BG = 30.0, 10.0, 2.0
+
+
+def _ideal_rig() -> StereoRig:
+    K = np.array([[600.0, 0.0, W / 2], [0.0, 600.0, H / 2], [0.0, 0.0, 1.0]])
+    half = np.array([0.15, 0.0, 0.0])
+    return StereoRig(Camera(K, np.zeros(5), (W, H), np.eye(3), -half), Camera(K.copy(), np.zeros(5), (W, H),
+                                                                            np.eye(3), half))
+
+
+def _texture(seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    t = cv2.GaussianBlur(rng.uniform(0, 255, (H, W + 64)).astype(np.float32), (0, 0), 1.5)
+    return np.asarray(cv2.normalize(t, None, 40, 220, cv2.NORM_MINMAX), np.float32)
+
+
+def _scene() -> tuple[StereoFrame, np.ndarray, np.ndarray]:
+    """A near square (disparity 30 px) in front of a farther bar (10 px) over a background (2 px): left and
+    right images (right(x) shows what left shows at x + d), the near and the far object's left masks."""
+    bg, near, far = _texture(1), _texture(2), _texture(3)
+    yy, xx = np.mgrid[0:H, 0:W]
+    m_near = (yy >= 150) & (yy < 230) & (xx >= 300) & (xx < 380)
+    m_far = (yy >= 200) & (yy < 300) & (xx >= 330) & (xx < 360) & ~m_near
+
+    def view(shift_near: float, shift_far: float, shift_bg: float) -> np.ndarray:
+        xn, xf, xb = (np.clip(xx + int(s), 0, W - 1) for s in (shift_near, shift_far, shift_bg))
+        out = bg[yy, xb].copy()
+        on_far = (yy >= 200) & (yy < 300) & (xf >= 330) & (xf < 360)
+        out[on_far] = far[yy, xf][on_far]
+        on_near = (yy >= 150) & (yy < 230) & (xn >= 300) & (xn < 380)
+        out[on_near] = near[yy, xn][on_near]
+        return np.asarray(out.clip(0, 255), np.uint8)
+
+    left, right = view(0, 0, 0), view(D_NEAR, D_FAR, D_BG)
+    return StereoFrame(0, left, right, 0.0, 0.0), m_near, m_far
+
+
+def _iou(a: np.ndarray, b: np.ndarray) -> float:
+    return float(np.count_nonzero(a & b) / max(np.count_nonzero(a | b), 1))
+
+
+def test_a_joint_outline_splits_by_the_disparity_each_part_matches_at() -> None:
+    frame, m_near, m_far = _scene()
+    rect = Rectifier(_ideal_rig())
+    box = (280, 130, 400, 320)
+    x0, y0, x1, y1 = box
+    obj = (m_near | m_far)[y0:y1, x0:x1]
+    near, far = m_near[y0:y1, x0:x1], m_far[y0:y1, x0:x1]
+    # the near object's own cost is low on its pixels, high on the farther bar's
+    c_near = match_cost(rect, frame, box, D_NEAR)
+    assert np.median(c_near[near]) < 3.0 < np.median(c_near[far])
+    kept = own_pixels(rect, frame, box, obj, D_NEAR, [D_NEAR, D_FAR], 16)
+    assert _iou(kept, near) > 0.9 and np.count_nonzero(kept & far) < 0.1 * np.count_nonzero(far)
+    kept_far = own_pixels(rect, frame, box, obj, D_FAR, [D_NEAR, D_FAR], 16)
+    assert _iou(kept_far, far) > 0.8
+    # no rival far enough (a part of the same body predicted apart): the outline stays whole
+    assert np.array_equal(own_pixels(rect, frame, box, obj, D_NEAR, [D_NEAR - 1.5, D_NEAR + 4.0], 16), obj)
+
+
+def test_hints_around_a_region_count_in_its_bounding_rectangle() -> None:
+    region = np.zeros((50, 60), bool)
+    region[10:40, 5:15] = True
+    region[10:20, 15:50] = True  # an L: (40, 35) lies in its rectangle, not on it
+    box = (100, 200, 160, 250)
+    hints = np.array([[108.0, 215.0, 20.0], [140.0, 235.0, 12.0], [170.0, 215.0, 30.0]])
+    assert hints_around(hints, region, box) == [20.0, 12.0]
+    assert hints_around(None, region, box) == [] and hints_around(hints[:0], region, box) == []

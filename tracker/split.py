@@ -1,0 +1,75 @@
+"""Which of several objects at different depths each pixel of a joint outline belongs to.
+
+A farther object seen past a nearer one's edge (a walker's legs below a ball crossing in front) joins the
+nearer one's outline: the temporal model (|Γ - g B| > ε) and the masks of eq. (9) say only that pixels
+changed, not which object changed them. Its photometry does: a left pixel p of an object at disparity d
+shows the same surface point as the right image at p's rectified position shifted by d (paper eq. 1, the
+parallel rig after rectification, x_r = x_l - d). Each pixel goes to the candidate disparity with the
+smallest windowed absolute difference (winner takes all over the few disparities of the tracks predicted
+there, not over the whole range: a local stereo match with a strong prior).
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from tracker.frames import StereoFrame
+from tracker.rectify import Rectifier
+
+F32 = NDArray[np.float32]
+BoolA = NDArray[np.bool_]
+Box = tuple[int, int, int, int]
+
+WINDOW_PX = 7  # side of the window the absolute differences are averaged over (px)
+# a rival disparity must differ from the object's by this much: 20 % of d is a depth step of about 20 % of
+# the range (eq. 2, z = b f / d), more than a walker's own depth (±0.3 m at 3 m); a part of the same body
+# predicted apart (a head taken for a track of its own) does not split the body
+MIN_GAP_PX = 2.0
+MIN_GAP_REL = 0.2
+
+
+def right_at(rect: Rectifier, frame: StereoFrame, box: Box, d: float) -> F32:
+    """The right image sampled where each left pixel of `box` would be seen at disparity d (px): the raw
+    right position of the rectified point (x_rect - d, y_rect), bilinear; (y1 - y0, x1 - x0) float32."""
+    x0, y0, x1, y1 = box
+    rc = rect.rect_of_raw[0][y0:y1, x0:x1]
+    qx, qy = rc[..., 0] - np.float32(d), np.ascontiguousarray(rc[..., 1])
+    ur = cv2.remap(rect.maps[1][0], qx, qy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    vr = cv2.remap(rect.maps[1][1], qx, qy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    return np.asarray(cv2.remap(frame.right.astype(np.float32), ur, vr, cv2.INTER_LINEAR,
+                                borderMode=cv2.BORDER_REPLICATE), np.float32)
+
+
+def match_cost(rect: Rectifier, frame: StereoFrame, box: Box, d: float) -> F32:
+    """Mean |Γ_left(p) - Γ_right(p at disparity d)| over a WINDOW_PX square around each pixel of `box`
+    (grey levels, float32 (y1 - y0, x1 - x0))."""
+    x0, y0, x1, y1 = box
+    left = frame.left[y0:y1, x0:x1].astype(np.float32)
+    diff = np.abs(left - right_at(rect, frame, box, d))
+    return np.asarray(cv2.blur(diff, (WINDOW_PX, WINDOW_PX), borderType=cv2.BORDER_REFLECT), np.float32)
+
+
+def own_pixels(rect: Rectifier, frame: StereoFrame, box: Box, obj: BoolA, d: float, others: list[float],
+               min_area: int) -> BoolA:
+    """The pixels of an object's outline `obj` (box pixels) that match at its disparity d at least as well
+    as at every other candidate disparity d_k in `others` (px) at least max(MIN_GAP_PX, MIN_GAP_REL d) away:
+    cost(d) <= min_k cost(d_k) (match_cost);
+    kept as its largest region, holes filled (where the two match alike, as on a surface without texture,
+    the region keeps them). The outline is returned whole when there is no such rival, or when fewer than
+    min_area pixels would be left."""
+    rivals = [o for o in others if abs(o - d) >= max(MIN_GAP_PX, MIN_GAP_REL * d)]
+    if not rivals:
+        return obj
+    own = match_cost(rect, frame, box, d)
+    best_other = np.minimum.reduce([match_cost(rect, frame, box, o) for o in rivals])
+    m8 = (obj & (own <= best_other)).astype(np.uint8)
+    contours, _ = cv2.findContours(m8, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    if not contours:
+        return obj
+    kept = np.zeros(m8.shape, np.uint8)
+    cv2.drawContours(kept, [max(contours, key=cv2.contourArea)], -1, 1, thickness=cv2.FILLED)
+    out = kept > 0
+    return out if int(np.count_nonzero(out)) >= min_area else obj
+
