@@ -9,7 +9,7 @@ from tracker.frames import StereoFrame
 from tracker.geometry import Camera, StereoRig
 from tracker.rectify import Rectifier
 from tracker.regions import hints_around
-from tracker.split import match_cost, own_pixels
+from tracker.split import match_cost, own_pixels, same_body
 
 W, H = 640, 480
 D_NEAR, D_FAR, D_BG = 30.0, 10.0, 2.0
@@ -79,3 +79,17 @@ def test_hints_around_a_region_count_in_its_bounding_rectangle() -> None:
     hints = np.array([[108.0, 215.0, 20.0], [140.0, 235.0, 12.0], [170.0, 215.0, 30.0]])
     assert hints_around(hints, region, box) == [20.0, 12.0]
     assert hints_around(None, region, box) == [] and hints_around(hints[:0], region, box) == []
+
+
+def test_a_head_past_the_necks_gap_is_part_of_the_body_a_farther_or_distant_region_is_not() -> None:
+    torso = np.zeros((200, 100), bool)
+    torso[40:200, 30:70] = True  # 160 rows: parts join across max(3, 0.03 x 160 = 5) px
+    head = np.zeros_like(torso)
+    head[20:36, 42:58] = True  # 4 px above the torso
+    assert same_body(torso, 20.0, head, 20.5)
+    assert not same_body(torso, 20.0, head, 26.0)  # 6 px apart at d = 20: another depth (gap max(2, 4))
+    far_off = np.zeros_like(torso)
+    far_off[20:30, 80:95] = True  # 10 px to the side of the torso
+    assert not same_body(torso, 20.0, far_off, 20.0)
+    assert not same_body(np.zeros_like(torso), 20.0, head, 20.0)
+

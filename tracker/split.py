@@ -73,3 +73,23 @@ def own_pixels(rect: Rectifier, frame: StereoFrame, box: Box, obj: BoolA, d: flo
     out = kept > 0
     return out if int(np.count_nonzero(out)) >= min_area else obj
 
+
+# two regions of one box at one depth are parts of one body when this close: a walker's head and torso
+# are a few centimetres apart (the neck), its arms a centimetre from its sides (px: max(PART_GAP_MIN_PX,
+# PART_GAP_REL x the larger part's height))
+PART_GAP_MIN_PX = 3
+PART_GAP_REL = 0.03
+
+
+def same_body(a: BoolA, d_a: float, b: BoolA, d_b: float) -> bool:
+    """Whether region b (box pixels, disparity d_b px) is a part of the body of region a (d_a): their
+    disparities differ by less than the rival gap of own_pixels (max(MIN_GAP_PX, MIN_GAP_REL d)) and b lies
+    within max(PART_GAP_MIN_PX, PART_GAP_REL h_a) px of a, h_a the rows a spans."""
+    if abs(d_a - d_b) >= max(MIN_GAP_PX, MIN_GAP_REL * max(d_a, d_b)):
+        return False
+    rows = np.flatnonzero(a.any(axis=1))
+    if rows.size == 0:
+        return False
+    gap = max(PART_GAP_MIN_PX, int(round(PART_GAP_REL * (rows[-1] - rows[0] + 1))))
+    k = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * gap + 1, 2 * gap + 1))
+    return bool(np.any((cv2.dilate(a.view(np.uint8), k) > 0) & b))
