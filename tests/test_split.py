@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
+import pytest
 
 from tracker.frames import StereoFrame
 from tracker.geometry import Camera, StereoRig
@@ -93,3 +94,25 @@ def test_a_head_past_the_necks_gap_is_part_of_the_body_a_farther_or_distant_regi
     assert not same_body(torso, 20.0, far_off, 20.0)
     assert not same_body(np.zeros_like(torso), 20.0, head, 20.0)
 
+
+
+def test_a_new_region_that_matches_nowhere_whole_is_searched_by_thirds(monkeypatch: pytest.MonkeyPatch) -> None:
+    from tracker import verify
+
+    calls: list[int] = []
+
+    class Strips:
+        def __init__(self, region: np.ndarray) -> None:
+            self.n = int(np.count_nonzero(region))
+
+        def match(self, region: np.ndarray, d0: float | None, radius: int) -> object:
+            calls.append(self.n)
+            return None if len(calls) < 3 else type("M", (), {"disparity": 17.0})()
+
+    v = object.__new__(verify.Verifier)
+    monkeypatch.setattr(v, "_strips", lambda frame, box, region, d: Strips(region), raising=False)
+    region = np.zeros((90, 20), bool)
+    region[:, 5:15] = True
+    assert v._coarse_disparity(None, (0, 0, 20, 90), region, None) == 17.0  # type: ignore[arg-type]
+    assert calls == [900, 300, 300]  # whole, top third, middle third
+    assert v._coarse_disparity(None, (0, 0, 20, 90), region, 5.0) == 5.0  # type: ignore[arg-type]

@@ -285,12 +285,17 @@ class Verifier:
         return obj, m_right | (m_left & near), d_hint
 
     def _coarse_disparity(self, frame: StereoFrame, box: Box, region: BoolA, d0: float | None) -> float | None:
-        """d0 if known, else the region's disparity from a search over the whole range (None: no match)."""
+        """d0 if known, else the region's disparity from a search over the whole range (None: no match).
+        A new object whose depth varies (a walker's swinging legs) may match nowhere as one surface, as a
+        tracked one may (match_object): then its top, middle and bottom thirds are searched in turn."""
         if d0 is not None:
             return d0
-        strips = self._strips(frame, box, region, None)
-        coarse = None if strips is None else strips.match(region, None, 0)
-        return None if coarse is None else coarse.disparity
+        for part in row_thirds(region):
+            strips = self._strips(frame, box, part, None)
+            coarse = None if strips is None else strips.match(part, None, 0)
+            if coarse is not None:
+                return coarse.disparity
+        return None
 
     def _strips(self, frame: StereoFrame, box: Box, region: BoolA, d_hint: float | None) -> _Strips | None:
         """Rectified left/right strips around a region's rows, wide enough for the disparity search."""
