@@ -116,3 +116,29 @@ def test_a_new_region_that_matches_nowhere_whole_is_searched_by_thirds(monkeypat
     assert v._coarse_disparity(None, (0, 0, 20, 90), region, None) == 17.0  # type: ignore[arg-type]
     assert calls == [900, 300, 300]  # whole, top third, middle third
     assert v._coarse_disparity(None, (0, 0, 20, 90), region, 5.0) == 5.0  # type: ignore[arg-type]
+
+
+def test_a_slanted_near_face_is_matched_on_a_narrower_window(monkeypatch: pytest.MonkeyPatch) -> None:
+    # a face whose disparity grows 0.12 px per column (a slant: 5.8 px across a 48 px window) matches
+    # nowhere at one disparity on the 48 x 32 window; on the 24 x 16 one it does, near its centre's 60 px
+    from tracker import verify
+    from tracker.detect import DetectorConfig
+
+    tex = _texture(4)
+    yy, xx = np.mgrid[0:H, 0:W].astype(np.float32)
+    left = np.asarray(tex[:, :W].clip(0, 255), np.uint8)
+    d = 60.0 + 0.12 * (xx - 320.0)  # the disparity the right image sees each left column at
+    # right(x_r) shows left(x) where x_r = x - d(x): x = (x_r + 60 - 0.12 * 320) / 0.88
+    src = (xx + 60.0 - 0.12 * 320.0) / 0.88
+    right = np.asarray(cv2.remap(tex[:, :W], src, yy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+                       .clip(0, 255), np.uint8)
+    assert abs(float(d[240, 320]) - 60.0) < 1e-6
+    frame = StereoFrame(0, left, right, 0.0, 0.0)
+    v = object.__new__(verify.Verifier)
+    v.rect, v.cfg = Rectifier(_ideal_rig()), DetectorConfig()
+    box = (260, 180, 380, 300)
+    obj = np.ones((120, 120), bool)
+    fit = v.match_object(frame, box, obj, 60.0)
+    assert fit is not None and abs(fit.disparity - 60.0) < 1.5
+    monkeypatch.setattr(verify, "_MATCH_HALF_SLANT", verify._MATCH_HALF)
+    assert v.match_object(frame, box, obj, 60.0) is None

@@ -81,6 +81,7 @@ def largest_region(mask: BoolA) -> BoolA:
 
 _CORE = np.ones((3, 3), np.uint8)
 _MATCH_HALF = (24, 16)  # half width and height (px) of the largest window matched
+_MATCH_HALF_SLANT = (12, 8)  # the same when the larger ones match nowhere (slanted faces, near)
 # weighted ZNCC a region's match needs: a whole object scores 0.95-0.99; a sliver beside an occluder that
 # catches the occluder's edge scores lower and would give a wrong disparity
 _MIN_SCORE = 0.8
@@ -256,15 +257,18 @@ class Verifier:
         """The object's disparity from matching its own pixels (a search over the whole range first when
         no prior d0 is known). None without a match, or with one the image edge may have cut short (the
         right camera may not see it). A region whose depth varies (a walker's swinging limbs about its
-        centroid) may match nowhere as one surface: then its top, middle and bottom thirds are tried."""
+        centroid) may match nowhere as one surface: then its top, middle and bottom thirds are tried; and a
+        near object's slanted faces, whose disparity changes across the window by several pixels (a face at
+        45° across 48 px at 3 m: about 5 px), match nowhere at one disparity: then windows half as wide."""
         d0 = self._coarse_disparity(frame, box, obj, d0)
         if d0 is None:
             return None
-        for part in row_thirds(obj):
-            strips = self._strips(frame, box, part, d0)
-            fine = None if strips is None else strips.match(part, d0, 4)
-            if fine is not None and strips is not None:
-                return None if strips.clipped and fine.disparity > strips.d_hi - 2.0 else fine
+        for half in (_MATCH_HALF, _MATCH_HALF_SLANT):
+            for part in row_thirds(obj):
+                strips = self._strips(frame, box, part, d0, half)
+                fine = None if strips is None else strips.match(part, d0, 4)
+                if fine is not None and strips is not None:
+                    return None if strips.clipped and fine.disparity > strips.d_hi - 2.0 else fine
         return None
 
     def _outline_stereo(self, frame: StereoFrame, box: Box, m_left: BoolA,
@@ -297,8 +301,10 @@ class Verifier:
                 return coarse.disparity
         return None
 
-    def _strips(self, frame: StereoFrame, box: Box, region: BoolA, d_hint: float | None) -> _Strips | None:
-        """Rectified left/right strips around a region's rows, wide enough for the disparity search."""
+    def _strips(self, frame: StereoFrame, box: Box, region: BoolA, d_hint: float | None,
+                half: tuple[int, int] = _MATCH_HALF) -> _Strips | None:
+        """Rectified left/right strips around a region's rows, wide enough for the disparity search; the
+        window matched is the region's central 2 half[0] x 2 half[1] px at most."""
         rect, cfg = self.rect, self.cfg
         x0, y0, x1, y1 = box
         bx, by, bw, bh = cv2.boundingRect(region.view(np.uint8))
@@ -314,8 +320,8 @@ class Verifier:
         # a large object is matched on a central window only: its disparity is then already far more
         # precise than its range needs (the range error grows as z², the object shrinks as 1/z)
         cx, cy = (rx0 + rx1) // 2, (ry0 + ry1) // 2
-        rx0, rx1 = max(rx0, cx - _MATCH_HALF[0]), min(rx1, cx + _MATCH_HALF[0])
-        ry0, ry1 = max(ry0, cy - _MATCH_HALF[1]), min(ry1, cy + _MATCH_HALF[1])
+        rx0, rx1 = max(rx0, cx - half[0]), min(rx1, cx + half[0])
+        ry0, ry1 = max(ry0, cy - half[1]), min(ry1, cy + half[1])
         d_hi = cfg.max_disparity if d_hint is None else int(np.ceil(d_hint)) + 8
         # near the left edge the search range runs out of image: keep at least 8 columns of the region
         # (its right part) and search as far as the image allows
