@@ -10,7 +10,8 @@ from tracker.frames import StereoFrame
 from tracker.geometry import Camera, StereoRig
 from tracker.rectify import Rectifier
 from tracker.regions import hints_around
-from tracker.split import match_cost, own_pixels, same_body
+from tracker.split import join_occluded, match_cost, own_pixels, same_body
+from tracker.verify import Blob
 
 W, H = 640, 480
 D_NEAR, D_FAR, D_BG = 30.0, 10.0, 2.0
@@ -142,3 +143,36 @@ def test_a_slanted_near_face_is_matched_on_a_narrower_window(monkeypatch: pytest
     assert fit is not None and abs(fit.disparity - 60.0) < 1.5
     monkeypatch.setattr(verify, "_MATCH_HALF_SLANT", verify._MATCH_HALF)
     assert v.match_object(frame, box, obj, 60.0) is None
+
+
+def _blob(box: tuple[int, int, int, int], d: float) -> Blob:
+    x0, y0, x1, y1 = box
+    mask = np.ones((y1 - y0, x1 - x0), bool)
+    c = np.array([(x0 + x1 - 1) / 2, (y0 + y1 - 1) / 2])
+    return Blob(box, mask, mask.size, c, c.copy(), d, 0.05, 4.0, 0.95)
+
+
+def test_one_body_seen_on_both_sides_of_a_nearer_post_is_joined() -> None:
+    yy, xx = np.mgrid[0:H, 0:W].astype(np.float64)
+    moments = np.dstack([xx, yy, np.ones_like(xx)])  # each raw pixel of unit area at its own position
+    left, right = _blob((0, 100, 40, 160), 16.0), _blob((50, 100, 130, 160), 16.3)
+
+    def post(box: tuple[int, int, int, int]) -> tuple[np.ndarray, np.ndarray]:
+        shape = (box[3] - box[1], box[2] - box[0])
+        return np.full(shape, 30.0, np.float32), np.ones(shape, bool)  # the post: nearer than the body
+
+    def open_ground(box: tuple[int, int, int, int]) -> tuple[np.ndarray, np.ndarray]:
+        disp, valid = post(box)
+        return disp * 0.2, valid  # farther than the body: two objects with background between them
+
+    (one,) = join_occluded([right, left], post, 0.04, moments)
+    assert one.box == (0, 100, 130, 160) and one.area == left.area + right.area
+    expect = (left.area * left.centroid_raw + right.area * right.centroid_raw) / (left.area + right.area)
+    assert np.allclose(one.centroid_raw, expect) and np.allclose(one.centroid_rect, expect)
+    assert one.disparity == right.disparity  # the larger part's
+    assert len(join_occluded([left, right], open_ground, 0.04, moments)) == 2
+    assert len(join_occluded([left, _blob((50, 100, 130, 160), 25.0)], post, 0.04, moments)) == 2  # depths
+    assert len(join_occluded([left, _blob((50, 300, 130, 360), 16.0)], post, 0.04, moments)) == 2  # rows
+    assert len(join_occluded([_blob((0, 100, 10, 160), 16.0), _blob((90, 100, 100, 160), 16.0)], post, 0.04,
+                             moments)) == 2  # the gap is most of the union's width
+

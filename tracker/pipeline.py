@@ -16,12 +16,13 @@ from numpy.typing import NDArray
 
 from tracker.bgdepth import BackgroundDepth
 from tracker.bglearn import LearntBackground, Sighting, StreamLearnConfig, StreamLearner, changed_box
-from tracker.detect import DetectorConfig, StereoSubtractor, paint_masks
+from tracker.detect import Box, DetectorConfig, StereoSubtractor, paint_masks
 from tracker.frames import StereoFrame
 from tracker.geometry import StereoRig
 from tracker.localize import Localization, Localizer
 from tracker.rectify import Rectifier
 from tracker.schedule import VerifySchedule
+from tracker.split import join_occluded
 from tracker.temporal import TemporalConfig, TemporalDetector, without_duplicates
 from tracker.tracks import MultiTracker, TrackerConfig
 from tracker.verify import Blob, Verifier
@@ -125,6 +126,8 @@ class Pipeline:
         blobs, deferred = self.schedule.run(boxes, hints, lambda box: self.verifier.verify_all(frame, box, hints), t0)
         blobs = without_duplicates(blobs)  # one object verified again from an overlapping box
         blobs = self.temporal.detect(frame, blobs, hints)  # cameras still: objects too near their background
+        blobs = join_occluded(blobs, lambda box: self._background_disparity(frame, box),  # one body, two sides
+                              self.subtractor.cfg.min_depth_gap, self.rect.area_moments)
         t2 = time.perf_counter()
         locs = [self.localizer.locate(b.centroid_rect, b.disparity, b.disparity_sigma, b.area, frame.gimbal,
                                       self._partly_seen(frame, b)) for b in blobs]
@@ -147,6 +150,11 @@ class Pipeline:
         pid = self.tracker.primary_id
         primary = next((d for d in dets if d.track_id == pid), None)
         return FrameResult(frame.index, frame.t, dets, pid, primary, ms, deferred)
+
+    def _background_disparity(self, frame: StereoFrame, box: Box) -> tuple[NDArray[np.float32], NDArray[np.bool_]]:
+        """The learnt background's rectified disparity (px) over a box of the left image, and where known."""
+        cm = self.subtractor.correspondence(0, frame.gimbal, box)
+        return cm.disparity, cm.valid
 
     def _partly_seen(self, frame: StereoFrame, b: Blob) -> tuple[float, float]:
         """The centroid's extra 1-σ (px, x and y) where the blob is cut by the image border or, while the

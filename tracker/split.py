@@ -7,9 +7,17 @@ shows the same surface point as the right image at p's rectified position shifte
 parallel rig after rectification, x_r = x_l - d). Each pixel goes to the candidate disparity with the
 smallest windowed absolute difference (winner takes all over the few disparities of the tracks predicted
 there, not over the whole range: a local stereo match with a strong prior).
+
+The other way round, one body may be verified as several blobs: its head past the neck's gap in the same
+candidate box (same_body), or its two sides of a nearer occluder such as a post in two boxes
+(join_occluded); those are joined into one.
 """
 
 from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import replace
+from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
@@ -17,6 +25,10 @@ from numpy.typing import NDArray
 
 from tracker.frames import StereoFrame
 from tracker.rectify import Rectifier
+from tracker.regions import mask_centroid
+
+if TYPE_CHECKING:
+    from tracker.verify import Blob
 
 F32 = NDArray[np.float32]
 BoolA = NDArray[np.bool_]
@@ -93,3 +105,68 @@ def same_body(a: BoolA, d_a: float, b: BoolA, d_b: float) -> bool:
     gap = max(PART_GAP_MIN_PX, int(round(PART_GAP_REL * (rows[-1] - rows[0] + 1))))
     k = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * gap + 1, 2 * gap + 1))
     return bool(np.any((cv2.dilate(a.view(np.uint8), k) > 0) & b))
+
+
+# two blobs at one depth are one body seen on both sides of a nearer occluder (a car behind a post, a
+# walker's legs past a hedge) when the occluder hides at most this share of the wider blob's width between
+# them (px: OCCLUDED_GAP_REL x the union's width) and is nearer by the gap of the verifier's depth test
+OCCLUDED_GAP_REL = 0.5
+OCCLUDER_SHARE = 0.6  # of the known background pixels in the gap that must be nearer than the body
+
+
+def occluded_gap(a: Blob, b: Blob, bg_disparity: Callable[[Box], tuple[F32, BoolA]], min_gap: float) -> bool:
+    """Whether blobs a (left) and b (right) are one body split by a nearer occluder: their disparities
+    within the rival gap (max(MIN_GAP_PX, MIN_GAP_REL d)), their rows overlapping by half the shorter, the
+    columns between them at most OCCLUDED_GAP_REL of the union's width, and there, on the shared rows, at
+    least OCCLUDER_SHARE of the known background (bg_disparity(box) -> (disparity px, valid)) nearer than
+    the body: d_bg > d (1 + min_gap) + 0.5 px, the verifier's test turned round."""
+    d = max(a.disparity, b.disparity)
+    if abs(a.disparity - b.disparity) >= max(MIN_GAP_PX, MIN_GAP_REL * d):
+        return False
+    ax1 = a.box[0] + int(np.flatnonzero(a.mask.any(axis=0))[-1]) + 1  # first column right of a
+    bx0 = b.box[0] + int(np.flatnonzero(b.mask.any(axis=0))[0])
+    ra, rb = (blob.box[1] + np.flatnonzero(blob.mask.any(axis=1)) for blob in (a, b))
+    y0, y1 = max(ra[0], rb[0]), min(ra[-1], rb[-1]) + 1
+    width = max(a.box[2], b.box[2]) - min(a.box[0], b.box[0])
+    if bx0 <= ax1 or bx0 - ax1 > OCCLUDED_GAP_REL * width or y1 - y0 < 0.5 * min(ra.size, rb.size):
+        return False
+    disp, valid = bg_disparity((ax1, y0, bx0, y1))
+    n = int(np.count_nonzero(valid))
+    return n > 0 and int(np.count_nonzero(valid & (disp > d * (1.0 + min_gap) + 0.5))) >= OCCLUDER_SHARE * n
+
+
+def join(a: Blob, b: Blob, area_moments: NDArray[np.float64]) -> Blob:
+    """Two blobs as one: masks painted into the union of their boxes, eq. (10) over the union (raw, and
+    rectified with each pixel's area from area_moments (H, W, 3) [a x, a y, a]), the larger blob's
+    disparity, match and gain."""
+    big = a if a.area >= b.area else b
+    box = (min(a.box[0], b.box[0]), min(a.box[1], b.box[1]), max(a.box[2], b.box[2]), max(a.box[3], b.box[3]))
+    mask = np.zeros((box[3] - box[1], box[2] - box[0]), bool)
+    for blob in (a, b):
+        x0, y0, x1, y1 = blob.box
+        mask[y0 - box[1]:y1 - box[1], x0 - box[0]:x1 - box[0]] |= blob.mask
+    m8 = mask.view(np.uint8)
+    area, c = mask_centroid(m8)
+    sx, sy, sa, _ = cv2.mean(area_moments[box[1]:box[3], box[0]:box[2]], mask=m8)
+    return replace(big, box=box, mask=mask, area=area, centroid_raw=c + (box[0], box[1]),
+                   centroid_rect=np.array([sx / sa, sy / sa]))
+
+
+def join_occluded(blobs: list[Blob], bg_disparity: Callable[[Box], tuple[F32, BoolA]], min_gap: float,
+                  area_moments: NDArray[np.float64]) -> list[Blob]:
+    """The blobs with each pair split by a nearer occluder (occluded_gap) joined in the first's place; the
+    others keep their order."""
+    out = list(blobs)
+    k = 0
+    while k + 1 < len(out):
+        j = next((j for j in range(k + 1, len(out)) if occluded_gap(*_left_right(out[k], out[j]), bg_disparity,
+                                                                   min_gap)), None)
+        if j is None:
+            k += 1
+            continue
+        out[k] = join(out[k], out.pop(j), area_moments)
+    return out
+
+
+def _left_right(a: Blob, b: Blob) -> tuple[Blob, Blob]:
+    return (a, b) if a.centroid_raw[0] <= b.centroid_raw[0] else (b, a)
