@@ -122,3 +122,38 @@ def test_a_walker_near_the_cameras_is_matched_and_kept() -> None:
         recall.append((fg & truth).sum() / truth.sum())
     seen = " ".join(f"{r:.2f}" for r in recall)
     assert np.mean(recall[3:]) > 0.7 and min(recall[3:]) > 0.2, seen  # before: 8 frames lost (recall 0)
+
+
+def test_surface_truth_is_the_mean_of_the_seen_surface() -> None:
+    # a ball at 8 m seen head-on: the seen cap's mean point lies on the line of sight to the centre,
+    # between R/2 and R nearer (a hemisphere's surface centroid is R/2 from its centre; the cap seen from
+    # 8 m is slightly less than a hemisphere, and perspective weights its near part more per pixel)
+    body = _still((0.0, 0.0, 8.0))
+    r, ids = _render([_wall(30.0)], body)
+    s = r.surface_mean(0, ids, 1, r.depth_window(0))
+    assert s is not None
+    c_left = r.rig.left.c
+    towards = (body.trajectory(0.0) - c_left) / np.linalg.norm(body.trajectory(0.0) - c_left)
+    along = float((body.trajectory(0.0) - s) @ towards)
+    across = np.linalg.norm((body.trajectory(0.0) - s) - along * towards)
+    assert SPHERE_R_M / 2 < along < SPHERE_R_M and across < 0.01
+    assert r.surface_mean(0, ids, 2, r.depth_window(0)) is None
+    # in a body scenario the truth carries it (world frame), near the volume centroid; plates do not
+    tt = SimRig(get_scenario("walk:body")).step().truth.target(1)
+    assert tt is not None and tt.surface_world is not None
+    assert 0.05 < np.linalg.norm(tt.surface_world - tt.world) < 0.6
+    plate = SimRig(get_scenario("walk")).step().truth.target(1)
+    assert plate is not None and plate.surface_world is None
+
+
+def test_truth_read_frames_later_equals_truth_read_at_once() -> None:
+    """A frame's truth is worked out when first read (SimFrame.truth): from that frame's render, not the
+    renderer's state at the time of reading."""
+    late, now = SimRig(get_scenario("walk:body"), seed=0), SimRig(get_scenario("walk:body"), seed=0)
+    frames = [late.step() for _ in range(8)]
+    for f, eager in zip(frames, [now.step().truth for _ in range(8)], strict=True):
+        for a, b in zip(f.truth.targets, eager.targets, strict=True):
+            assert a.area_left == b.area_left and a.area_right == b.area_right
+            assert (a.surface_world is None) == (b.surface_world is None)
+            if a.surface_world is not None and b.surface_world is not None:
+                assert np.allclose(a.surface_world, b.surface_world)

@@ -79,6 +79,8 @@ class _Acc:
     near: list[float] = field(default_factory=list)  # a body's nearest point's depth before its centre (m)
     az: list[float] = field(default_factory=list)
     el: list[float] = field(default_factory=list)
+    # solid bodies wider than WIDE_PX: angle errors against the volume centroid and the seen surface's mean
+    wide: list[tuple[float, float, float, float]] = field(default_factory=list)
     z_r: list[float] = field(default_factory=list)  # error / reported 1-σ, per detected frame
     z_az: list[float] = field(default_factory=list)
     z_el: list[float] = field(default_factory=list)
@@ -99,6 +101,20 @@ def sigma_consistency(z: list[float]) -> tuple[float, float]:
         return float("nan"), float("nan")
     a = np.asarray(z, float)
     return float(np.mean(np.abs(a) <= 1.0)), float(np.mean(a * a))
+
+
+WIDE_PX = 40  # the angle acceptance lines hold for targets wider than this (px)
+
+
+def _deg(a: float) -> float:
+    """An angle difference (rad) wrapped to (-180°, 180°], in degrees."""
+    return float(np.degrees(np.angle(np.exp(1j * a))))
+
+
+def _width_px(ids_left: NDArray[np.uint8], target_id: int) -> int:
+    """Width (px) of a target's pixels in the left image: its last column minus its first, plus one."""
+    cols = np.flatnonzero((ids_left == target_id).any(axis=0))
+    return int(cols[-1] - cols[0] + 1) if cols.size else 0
 
 
 def _f1(tp: int, fp: int, fn: int) -> float:
@@ -151,8 +167,11 @@ def score_frame(acc: _Acc, res: FrameResult, truth: FrameTruth, pipe: Pipeline, 
     z = float(tt.rig[2])
     acc.limit.append(z * z * 0.1 / (rect.b * rect.f))
     acc.near.append(tt.near_depth_m)
-    acc.az.append(float(np.degrees(np.angle(np.exp(1j * (loc.theta - th_t))))))
+    acc.az.append(_deg(loc.theta - th_t))
     acc.el.append(float(np.degrees(loc.phi - ph_t)))
+    if tt.surface_world is not None and _width_px(truth.ids_left, tt.target_id) > WIDE_PX:
+        _, th_s, ph_s = spherical(tt.surface_world - pipe.localizer.origin)
+        acc.wide.append((acc.az[-1], acc.el[-1], _deg(loc.theta - th_s), float(np.degrees(loc.phi - ph_s))))
     tiny = 1e-12  # a zero σ makes any error infinitely many σ
     acc.z_r.append((loc.r - r_t) / max(loc.sigma_r, tiny))
     acc.z_az.append(float(np.radians(acc.az[-1])) / max(loc.sigma_theta, tiny))
@@ -228,6 +247,11 @@ def _report(name: str, seed: int, n: int, acc: _Acc, gain: Callable[[float], flo
     if any(v > 0 for v in acc.near):  # solid bodies: the range acceptance allows their own depth
         extra["range_depth_allowance_m"] = float(np.mean(acc.near))
         extra["range_rmse_allowed_m"] = float(1.5 * np.mean(acc.limit) + np.mean(acc.near))
+    if acc.wide:  # solid bodies wider than WIDE_PX: angles against the centroid and the seen surface's mean
+        w = np.asarray(acc.wide)
+        extra["wide_frames"] = float(len(w))
+        for k, key in enumerate(("azimuth", "elevation", "azimuth_surface", "elevation_surface")):
+            extra[f"{key}_rmse_wide_deg"] = _rms(list(w[:, k]))
     (r_in, r_nees), (a_in, a_nees), (e_in, e_nees) = (sigma_consistency(z) for z in (acc.z_r, acc.z_az, acc.z_el))
     return EvalReport(
         scenario=name, seed=seed, frames=n, visible_frames=acc.visible,

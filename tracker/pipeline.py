@@ -24,6 +24,7 @@ from tracker.localize import Localization, Localizer
 from tracker.outline import OutlineConfig, warped_outline_sigma_px
 from tracker.rectify import Rectifier
 from tracker.schedule import VerifySchedule
+from tracker.split import join_occluded
 from tracker.temporal import TemporalConfig, TemporalDetector, without_duplicates
 from tracker.tracks import MultiTracker, TrackerConfig
 from tracker.verify import Blob, Verifier
@@ -129,6 +130,8 @@ class Pipeline:
         blobs, deferred = self.schedule.run(boxes, hints, lambda box: self.verifier.verify_all(frame, box, hints), t0)
         blobs = without_duplicates(blobs)  # one object verified again from an overlapping box
         blobs = self.temporal.detect(frame, blobs, hints)  # cameras still: objects too near their background
+        blobs = join_occluded(blobs, lambda box: self._background_disparity(frame, box),  # one body, two sides
+                              self.subtractor.cfg.min_depth_gap, self.rect.area_moments)
         t2 = time.perf_counter()
         locs = [self.localizer.locate(b.centroid_rect, b.disparity, self._disparity_sigma(frame, b), b.area,
                                       frame.gimbal, self._centroid_extra(frame, b, blobs)) for b in blobs]
@@ -151,6 +154,11 @@ class Pipeline:
         pid = self.tracker.primary_id
         primary = next((d for d in dets if d.track_id == pid), None)
         return FrameResult(frame.index, frame.t, dets, pid, primary, ms, deferred)
+
+    def _background_disparity(self, frame: StereoFrame, box: Box) -> tuple[NDArray[np.float32], NDArray[np.bool_]]:
+        """The learnt background's rectified disparity (px) over a box of the left image, and where known."""
+        cm = self.subtractor.correspondence(0, frame.gimbal, box)
+        return cm.disparity, cm.valid
 
     def _disparity_sigma(self, frame: StereoFrame, b: Blob) -> float:
         """The disparity's 1-σ (px): the matcher's own, or the scatter of the disparities of the blob's

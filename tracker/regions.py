@@ -54,16 +54,33 @@ def row_thirds(obj: BoolA) -> Iterator[BoolA]:
             yield part
 
 
+def hints_inside(hints: F64 | None, region: BoolA, box: Box) -> list[F64]:
+    """The predicted tracks (rows (x, y, disparity), raw left pixels) whose position lies in the region."""
+    if hints is None or len(hints) == 0:
+        return []
+    x0, y0 = box[0], box[1]
+    return [h for h in hints if 0 <= int(h[1]) - y0 < region.shape[0] and 0 <= int(h[0]) - x0 < region.shape[1]
+            and region[int(h[1]) - y0, int(h[0]) - x0]]
+
+
+def hints_around(hints: F64 | None, region: BoolA, box: Box) -> list[float]:
+    """The predicted disparities (px) of the tracks whose predicted position lies within the bounding
+    rectangle of the region (box pixels): a track seen past another object's edge has its predicted
+    centroid there, though often not on the region itself."""
+    if hints is None or len(hints) == 0:
+        return []
+    bx, by, bw, bh = cv2.boundingRect(region.view(np.uint8))
+    x0, y0 = box[0] + bx, box[1] + by
+    return [float(h[2]) for h in hints if x0 <= h[0] < x0 + bw and y0 <= h[1] < y0 + bh]
+
+
 def nearest_hint(hints: F64 | None, region: BoolA, box: Box) -> float | None:
     """The disparity of the predicted track nearest to the region's centre, if one lies inside it."""
-    if hints is None or len(hints) == 0:
-        return None
     ys, xs = np.nonzero(region)
     if xs.size == 0:
         return None
     x0, y0 = box[0], box[1]
-    inside = [h for h in hints if 0 <= int(h[1]) - y0 < region.shape[0] and 0 <= int(h[0]) - x0 < region.shape[1]
-              and region[int(h[1]) - y0, int(h[0]) - x0]]
+    inside = hints_inside(hints, region, box)
     if not inside:
         return None
     c = np.array([xs.mean() + x0, ys.mean() + y0])

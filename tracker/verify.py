@@ -9,7 +9,7 @@ exactly; Ivanov, Bobick and Liu's verification by warping in both directions).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
@@ -20,7 +20,8 @@ from tracker.detect import Box, StereoSubtractor
 from tracker.disparity_sigma import part_disparities
 from tracker.frames import StereoFrame
 from tracker.rectify import Rectifier
-from tracker.regions import background_disparity, mask_centroid, nearest_hint, row_thirds
+from tracker.regions import background_disparity, hints_around, mask_centroid, nearest_hint, row_thirds
+from tracker.split import own_pixels, same_body
 from tracker.stereo import RegionMatch, match_region, refine_region
 
 U8 = NDArray[np.uint8]
@@ -81,6 +82,7 @@ def largest_region(mask: BoolA) -> BoolA:
 
 _CORE = np.ones((3, 3), np.uint8)
 _MATCH_HALF = (24, 16)  # half width and height (px) of the largest window matched
+_MATCH_HALF_SLANT = (12, 8)  # the same when the larger ones match nowhere (slanted faces, near)
 # weighted ZNCC a region's match needs: a whole object scores 0.95-0.99; a sliver beside an occluder that
 # catches the occluder's edge scores lower and would give a wrong disparity
 _MIN_SCORE = 0.8
@@ -168,12 +170,17 @@ class Verifier:
             if n_left < min_area:
                 break
             hint = nearest_hint(hints, m_left, box)
+            around = hints_around(hints, m_left, box)
             got = None if self._too_small_to_be_new(n_left, hint) else self._verify_region(frame, box, cm, m_left,
-                                                                                          hint, free)
+                                                                                          hint, free, around)
             if got is None:
                 m_raw = m_raw & ~m_left  # not an object: try what else the box holds
                 continue
             blob, changed = got
+            part_of = next((k for k, f in enumerate(found)
+                            if same_body(f.mask, f.disparity, blob.mask, blob.disparity)), None)
+            if part_of is not None:  # a part of a body found before (a head past the neck's gap): one object
+                blob = self._joined(found.pop(part_of), blob)
             found.append(blob)
             # a second object in the same box must be substantial: not the rim left around the first
             min_area = max(min_area, 4 * cfg.min_area_px, blob.area // 10)
@@ -183,6 +190,17 @@ class Verifier:
                 break
         return found
 
+    def _joined(self, a: Blob, b: Blob) -> Blob:
+        """Two blobs of one box as one: the union of their masks, its centroids (eq. 10), a's disparity
+        (the larger part's, verified first) and match."""
+        x0, y0, x1, y1 = a.box
+        obj = a.mask | b.mask
+        m8 = obj.view(np.uint8)
+        area, c_box = mask_centroid(m8)
+        sx, sy, sa, _ = cv2.mean(self.rect.area_moments[y0:y1, x0:x1], mask=m8)
+        return replace(a, mask=obj, area=area, centroid_raw=c_box + (x0, y0), centroid_rect=np.array([sx / sa,
+                                                                                                        sy / sa]))
+
     def _too_small_to_be_new(self, area: int, hint: float | None) -> bool:
         """While the cameras move, a region no track is predicted in must cover moving_min_cells · stride²
         pixels to be verified as a new object: the rule the candidate stage applies to whole boxes (a moving
@@ -191,10 +209,14 @@ class Verifier:
         return self.sub.moving and hint is None and area < cfg.moving_min_cells * cfg.stride * cfg.stride
 
     def _verify_region(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap, m_left: BoolA,
-                       d_hint: float | None, free: BoolA) -> tuple[Blob, BoolA | None] | None:
+                       d_hint: float | None, free: BoolA, around: list[float] | None = None
+                       ) -> tuple[Blob, BoolA | None] | None:
         """Verify one connected region of the left-key mask inside a box. Returns the blob and, with the
-        cameras still, the box's pixels unlike the temporal background (|Γ - g B| > ε + 3 g D)."""
+        cameras still, the box's pixels unlike the temporal background (|Γ - g B| > ε + 3 g D).
+        around: the predicted disparities of the tracks about the region (regions.hints_around); with more
+        than one, a tracked object's outline keeps only its pixels that match best at its own (tracker.split)."""
         cfg = self.cfg
+        around = around or []
         x0, y0, x1, y1 = box
         gain, changed = 1.0, None
         model = self.sub.left_background(frame.gimbal)
@@ -205,6 +227,8 @@ class Verifier:
             obj, gain, changed = temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1],
                                                    dev[y0:y1, x0:x1], np.zeros_like(m_left), m_left & free,
                                                    cfg.epsilon)
+            if len(around) > 1:  # other tracks predicted about the region: keep the pixels at this one's d
+                obj = own_pixels(self.rect, frame, box, obj, d_hint, around, cfg.min_area_px)
             d0 = d_hint
         else:
             # a new object, or the cameras move: verification by warping in both directions
@@ -234,15 +258,18 @@ class Verifier:
         """The object's disparity from matching its own pixels (a search over the whole range first when
         no prior d0 is known). None without a match, or with one the image edge may have cut short (the
         right camera may not see it). A region whose depth varies (a walker's swinging limbs about its
-        centroid) may match nowhere as one surface: then its top, middle and bottom thirds are tried."""
+        centroid) may match nowhere as one surface: then its top, middle and bottom thirds are tried; and a
+        near object's slanted faces, whose disparity changes across the window by several pixels (a face at
+        45° across 48 px at 3 m: about 5 px), match nowhere at one disparity: then windows half as wide."""
         d0 = self._coarse_disparity(frame, box, obj, d0)
         if d0 is None:
             return None
-        for part in row_thirds(obj):
-            strips = self._strips(frame, box, part, d0)
-            fine = None if strips is None else strips.match(part, d0, 4)
-            if fine is not None and strips is not None:
-                return None if strips.clipped and fine.disparity > strips.d_hi - 2.0 else fine
+        for half in (_MATCH_HALF, _MATCH_HALF_SLANT):
+            for part in row_thirds(obj):
+                strips = self._strips(frame, box, part, d0, half)
+                fine = None if strips is None else strips.match(part, d0, 4)
+                if fine is not None and strips is not None:
+                    return None if strips.clipped and fine.disparity > strips.d_hi - 2.0 else fine
         return None
 
     def part_disparities(self, frame: StereoFrame, blob: Blob) -> list[float]:
@@ -273,15 +300,22 @@ class Verifier:
         return obj, m_right | (m_left & near), d_hint
 
     def _coarse_disparity(self, frame: StereoFrame, box: Box, region: BoolA, d0: float | None) -> float | None:
-        """d0 if known, else the region's disparity from a search over the whole range (None: no match)."""
+        """d0 if known, else the region's disparity from a search over the whole range (None: no match).
+        A new object whose depth varies (a walker's swinging legs) may match nowhere as one surface, as a
+        tracked one may (match_object): then its top, middle and bottom thirds are searched in turn."""
         if d0 is not None:
             return d0
-        strips = self._strips(frame, box, region, None)
-        coarse = None if strips is None else strips.match(region, None, 0)
-        return None if coarse is None else coarse.disparity
+        for part in row_thirds(region):
+            strips = self._strips(frame, box, part, None)
+            coarse = None if strips is None else strips.match(part, None, 0)
+            if coarse is not None:
+                return coarse.disparity
+        return None
 
-    def _strips(self, frame: StereoFrame, box: Box, region: BoolA, d_hint: float | None) -> _Strips | None:
-        """Rectified left/right strips around a region's rows, wide enough for the disparity search."""
+    def _strips(self, frame: StereoFrame, box: Box, region: BoolA, d_hint: float | None,
+                half: tuple[int, int] = _MATCH_HALF) -> _Strips | None:
+        """Rectified left/right strips around a region's rows, wide enough for the disparity search; the
+        window matched is the region's central 2 half[0] x 2 half[1] px at most."""
         rect, cfg = self.rect, self.cfg
         x0, y0, x1, y1 = box
         bx, by, bw, bh = cv2.boundingRect(region.view(np.uint8))
@@ -297,8 +331,8 @@ class Verifier:
         # a large object is matched on a central window only: its disparity is then already far more
         # precise than its range needs (the range error grows as z², the object shrinks as 1/z)
         cx, cy = (rx0 + rx1) // 2, (ry0 + ry1) // 2
-        rx0, rx1 = max(rx0, cx - _MATCH_HALF[0]), min(rx1, cx + _MATCH_HALF[0])
-        ry0, ry1 = max(ry0, cy - _MATCH_HALF[1]), min(ry1, cy + _MATCH_HALF[1])
+        rx0, rx1 = max(rx0, cx - half[0]), min(rx1, cx + half[0])
+        ry0, ry1 = max(ry0, cy - half[1]), min(ry1, cy + half[1])
         d_hi = cfg.max_disparity if d_hint is None else int(np.ceil(d_hint)) + 8
         # near the left edge the search range runs out of image: keep at least 8 columns of the region
         # (its right part) and search as far as the image allows

@@ -55,6 +55,9 @@ class TargetTruth:
     visible_fraction: float
     area_right: int = 0
     near_depth_m: float = 0.0  # a solid body: how much nearer than `world` its nearest point is (m)
+    # a solid body: the mean world point (m, (3,)) of the surface the left camera sees of it (Renderer.
+    # surface_mean): the point a camera can measure; None for plates (their centre is that point) or unseen
+    surface_world: F64 | None = None
 
 
 @dataclass(frozen=True)
@@ -359,6 +362,32 @@ class SimRenderer:
             self._remember(key, ([left[2], right[2]], [left[3], right[3]]))
         frame = StereoFrame(index, left[0], right[0], t, t, gimbal)
         return frame, [left[1], right[1]]
+
+    def depth_window(self, k: int) -> tuple[tuple[int, int, int, int], F32] | None:
+        """A copy of camera k's window of moving objects in the last render and the distances (m) along
+        each pixel's ray drawn there, (y1 - y0, x1 - x0) float32; None when nothing moving was drawn."""
+        win = self.windows[k]
+        if win is None:
+            return None
+        x0, y0, x1, y1 = win
+        return win, self._depth[k][y0:y1, x0:x1].copy()
+
+    def surface_mean(self, k: int, ids: U8, target_id: int,
+                     window: tuple[tuple[int, int, int, int], F32] | None) -> F64 | None:
+        """The mean point (rig frame, m, (3,)) of the surface an object shows camera k in a render (window:
+        that render's depth_window(k)): over its pixels (ids == target_id), (1/N) Σ (c + ρ_p s_p), c the
+        camera centre, ρ_p the pixel's unit ray and s_p the distance along it to the surface drawn there.
+        None when the object shows no pixel."""
+        if window is None:
+            return None
+        (x0, y0, x1, y1), depth = window
+        m = ids[y0:y1, x0:x1] == target_id
+        if not m.any():
+            return None
+        view = self.views[k]
+        s = depth[m].astype(np.float64)
+        rays = view.rays[y0:y1, x0:x1][m].astype(np.float64)
+        return np.asarray(view.cam.c + (rays * s[:, None]).mean(axis=0))
 
     def _cast_moving(self, k: int, R_wr: F64, moving: Sequence[Surface | Solid], t: float, img8: U8,
                      base_inv: F32, ids: U8) -> None:

@@ -317,9 +317,11 @@ class SimRig:
         gain = self.script.gain(ts) if self.script is not None else self.scenario.gain(ts)
         frame, ids = self.renderer.render(i, t, g, moving, gain)
         windows = tuple(self.renderer.windows)
+        depth = self.renderer.depth_window(0) if any(isinstance(o, BodyObject) for o in objects) else None
 
         def truth() -> FrameTruth:
-            return FrameTruth(t, g, tuple(self._truth(o, ts, R_wr, ids, windows) for o in objects), ids[0], ids[1])
+            return FrameTruth(t, g, tuple(self._truth(o, ts, R_wr, ids, windows, depth) for o in objects),
+                              ids[0], ids[1])
 
         self.index += 1
         self._last = SimFrame(frame, truth)
@@ -338,10 +340,12 @@ class SimRig:
         pass
 
     def _truth(self, obj: MovingObject | BodyObject, t: float, R_wr: F64, ids: list[NDArray[np.uint8]],
-               windows: tuple[tuple[int, int, int, int] | None, ...]) -> TargetTruth:
+               windows: tuple[tuple[int, int, int, int] | None, ...],
+               depth: tuple[tuple[int, int, int, int], NDArray[np.float32]] | None) -> TargetTruth:
         """Truth of one object at scene time t (s): its centre, projections, and its pixels' centroids and
         areas in each image (ids: the (left, right) id images, moving objects drawn only inside `windows`);
-        visible fraction against area·(f/z)²."""
+        visible fraction against area·(f/z)²; for a body, the mean point of the surface it shows the left
+        camera (depth: that render's depth_window(0))."""
         tid, world = obj.target_id, obj.trajectory(t)
         rig_p = R_wr.T @ world
         pl = self.rig.left.project(rig_p[None, :])[0]
@@ -359,6 +363,10 @@ class SimRig:
             cents.append(np.array([m["m10"] / m["m00"] + x0, m["m01"] / m["m00"] + y0])
                          if m["m00"] > 0 else None)
         expected = obj.area_m2 * (self.rig.left.f / max(rig_p[2], 0.1)) ** 2
-        near = obj.near_depth_m(t, R_wr @ self.rig.left.c) if isinstance(obj, BodyObject) else 0.0
+        near, surface = 0.0, None
+        if isinstance(obj, BodyObject):
+            near = obj.near_depth_m(t, R_wr @ self.rig.left.c)
+            seen = self.renderer.surface_mean(0, ids[0], tid, depth)
+            surface = None if seen is None else R_wr @ seen
         return TargetTruth(tid, world, rig_p, pl, pr, cents[0], cents[1], areas[0],
-                           min(areas[0] / expected, 1.0), areas[1], near)
+                           min(areas[0] / expected, 1.0), areas[1], near, surface)

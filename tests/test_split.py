@@ -1,0 +1,178 @@
+"""Pixels of a joint outline assigned to the disparity they match at (tracker.split, issue 12 item 2)."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from tracker.frames import StereoFrame
+from tracker.geometry import Camera, StereoRig
+from tracker.rectify import Rectifier
+from tracker.regions import hints_around
+from tracker.split import join_occluded, match_cost, own_pixels, same_body
+from tracker.verify import Blob
+
+W, H = 640, 480
+D_NEAR, D_FAR, D_BG = 30.0, 10.0, 2.0
+
+
+def _ideal_rig() -> StereoRig:
+    K = np.array([[600.0, 0.0, W / 2], [0.0, 600.0, H / 2], [0.0, 0.0, 1.0]])
+    half = np.array([0.15, 0.0, 0.0])
+    return StereoRig(Camera(K, np.zeros(5), (W, H), np.eye(3), -half), Camera(K.copy(), np.zeros(5), (W, H),
+                                                                            np.eye(3), half))
+
+
+def _texture(seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    t = cv2.GaussianBlur(rng.uniform(0, 255, (H, W + 64)).astype(np.float32), (0, 0), 1.5)
+    return np.asarray(cv2.normalize(t, None, 40, 220, cv2.NORM_MINMAX), np.float32)
+
+
+def _scene() -> tuple[StereoFrame, np.ndarray, np.ndarray]:
+    """A near square (disparity 30 px) in front of a farther bar (10 px) over a background (2 px): left and
+    right images (right(x) shows what left shows at x + d), the near and the far object's left masks."""
+    bg, near, far = _texture(1), _texture(2), _texture(3)
+    yy, xx = np.mgrid[0:H, 0:W]
+    m_near = (yy >= 150) & (yy < 230) & (xx >= 300) & (xx < 380)
+    m_far = (yy >= 200) & (yy < 300) & (xx >= 330) & (xx < 360) & ~m_near
+
+    def view(shift_near: float, shift_far: float, shift_bg: float) -> np.ndarray:
+        xn, xf, xb = (np.clip(xx + int(s), 0, W - 1) for s in (shift_near, shift_far, shift_bg))
+        out = bg[yy, xb].copy()
+        on_far = (yy >= 200) & (yy < 300) & (xf >= 330) & (xf < 360)
+        out[on_far] = far[yy, xf][on_far]
+        on_near = (yy >= 150) & (yy < 230) & (xn >= 300) & (xn < 380)
+        out[on_near] = near[yy, xn][on_near]
+        return np.asarray(out.clip(0, 255), np.uint8)
+
+    left, right = view(0, 0, 0), view(D_NEAR, D_FAR, D_BG)
+    return StereoFrame(0, left, right, 0.0, 0.0), m_near, m_far
+
+
+def _iou(a: np.ndarray, b: np.ndarray) -> float:
+    return float(np.count_nonzero(a & b) / max(np.count_nonzero(a | b), 1))
+
+
+def test_a_joint_outline_splits_by_the_disparity_each_part_matches_at() -> None:
+    frame, m_near, m_far = _scene()
+    rect = Rectifier(_ideal_rig())
+    box = (280, 130, 400, 320)
+    x0, y0, x1, y1 = box
+    obj = (m_near | m_far)[y0:y1, x0:x1]
+    near, far = m_near[y0:y1, x0:x1], m_far[y0:y1, x0:x1]
+    # the near object's own cost is low on its pixels, high on the farther bar's
+    c_near = match_cost(rect, frame, box, D_NEAR)
+    assert np.median(c_near[near]) < 3.0 < np.median(c_near[far])
+    kept = own_pixels(rect, frame, box, obj, D_NEAR, [D_NEAR, D_FAR], 16)
+    assert _iou(kept, near) > 0.9 and np.count_nonzero(kept & far) < 0.1 * np.count_nonzero(far)
+    kept_far = own_pixels(rect, frame, box, obj, D_FAR, [D_NEAR, D_FAR], 16)
+    assert _iou(kept_far, far) > 0.8
+    # no rival far enough (a part of the same body predicted apart): the outline stays whole
+    assert np.array_equal(own_pixels(rect, frame, box, obj, D_NEAR, [D_NEAR - 1.5, D_NEAR + 4.0], 16), obj)
+
+
+def test_hints_around_a_region_count_in_its_bounding_rectangle() -> None:
+    region = np.zeros((50, 60), bool)
+    region[10:40, 5:15] = True
+    region[10:20, 15:50] = True  # an L: (40, 35) lies in its rectangle, not on it
+    box = (100, 200, 160, 250)
+    hints = np.array([[108.0, 215.0, 20.0], [140.0, 235.0, 12.0], [170.0, 215.0, 30.0]])
+    assert hints_around(hints, region, box) == [20.0, 12.0]
+    assert hints_around(None, region, box) == [] and hints_around(hints[:0], region, box) == []
+
+
+def test_a_head_past_the_necks_gap_is_part_of_the_body_a_farther_or_distant_region_is_not() -> None:
+    torso = np.zeros((200, 100), bool)
+    torso[40:200, 30:70] = True  # 160 rows: parts join across max(3, 0.03 x 160 = 5) px
+    head = np.zeros_like(torso)
+    head[20:36, 42:58] = True  # 4 px above the torso
+    assert same_body(torso, 20.0, head, 20.5)
+    assert not same_body(torso, 20.0, head, 26.0)  # 6 px apart at d = 20: another depth (gap max(2, 4))
+    far_off = np.zeros_like(torso)
+    far_off[20:30, 80:95] = True  # 10 px to the side of the torso
+    assert not same_body(torso, 20.0, far_off, 20.0)
+    assert not same_body(np.zeros_like(torso), 20.0, head, 20.0)
+
+
+
+def test_a_new_region_that_matches_nowhere_whole_is_searched_by_thirds(monkeypatch: pytest.MonkeyPatch) -> None:
+    from tracker import verify
+
+    calls: list[int] = []
+
+    class Strips:
+        def __init__(self, region: np.ndarray) -> None:
+            self.n = int(np.count_nonzero(region))
+
+        def match(self, region: np.ndarray, d0: float | None, radius: int) -> object:
+            calls.append(self.n)
+            return None if len(calls) < 3 else type("M", (), {"disparity": 17.0})()
+
+    v = object.__new__(verify.Verifier)
+    monkeypatch.setattr(v, "_strips", lambda frame, box, region, d: Strips(region), raising=False)
+    region = np.zeros((90, 20), bool)
+    region[:, 5:15] = True
+    assert v._coarse_disparity(None, (0, 0, 20, 90), region, None) == 17.0  # type: ignore[arg-type]
+    assert calls == [900, 300, 300]  # whole, top third, middle third
+    assert v._coarse_disparity(None, (0, 0, 20, 90), region, 5.0) == 5.0  # type: ignore[arg-type]
+
+
+def test_a_slanted_near_face_is_matched_on_a_narrower_window(monkeypatch: pytest.MonkeyPatch) -> None:
+    # a face whose disparity grows 0.12 px per column (a slant: 5.8 px across a 48 px window) matches
+    # nowhere at one disparity on the 48 x 32 window; on the 24 x 16 one it does, near its centre's 60 px
+    from tracker import verify
+    from tracker.detect import DetectorConfig
+
+    tex = _texture(4)
+    yy, xx = np.mgrid[0:H, 0:W].astype(np.float32)
+    left = np.asarray(tex[:, :W].clip(0, 255), np.uint8)
+    d = 60.0 + 0.12 * (xx - 320.0)  # the disparity the right image sees each left column at
+    # right(x_r) shows left(x) where x_r = x - d(x): x = (x_r + 60 - 0.12 * 320) / 0.88
+    src = (xx + 60.0 - 0.12 * 320.0) / 0.88
+    right = np.asarray(cv2.remap(tex[:, :W], src, yy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+                       .clip(0, 255), np.uint8)
+    assert abs(float(d[240, 320]) - 60.0) < 1e-6
+    frame = StereoFrame(0, left, right, 0.0, 0.0)
+    v = object.__new__(verify.Verifier)
+    v.rect, v.cfg = Rectifier(_ideal_rig()), DetectorConfig()
+    box = (260, 180, 380, 300)
+    obj = np.ones((120, 120), bool)
+    fit = v.match_object(frame, box, obj, 60.0)
+    assert fit is not None and abs(fit.disparity - 60.0) < 1.5
+    monkeypatch.setattr(verify, "_MATCH_HALF_SLANT", verify._MATCH_HALF)
+    assert v.match_object(frame, box, obj, 60.0) is None
+
+
+def _blob(box: tuple[int, int, int, int], d: float) -> Blob:
+    x0, y0, x1, y1 = box
+    mask = np.ones((y1 - y0, x1 - x0), bool)
+    c = np.array([(x0 + x1 - 1) / 2, (y0 + y1 - 1) / 2])
+    return Blob(box, mask, mask.size, c, c.copy(), d, 0.05, 4.0, 0.95)
+
+
+def test_one_body_seen_on_both_sides_of_a_nearer_post_is_joined() -> None:
+    yy, xx = np.mgrid[0:H, 0:W].astype(np.float64)
+    moments = np.dstack([xx, yy, np.ones_like(xx)])  # each raw pixel of unit area at its own position
+    left, right = _blob((0, 100, 40, 160), 16.0), _blob((50, 100, 130, 160), 16.3)
+
+    def post(box: tuple[int, int, int, int]) -> tuple[np.ndarray, np.ndarray]:
+        shape = (box[3] - box[1], box[2] - box[0])
+        return np.full(shape, 30.0, np.float32), np.ones(shape, bool)  # the post: nearer than the body
+
+    def open_ground(box: tuple[int, int, int, int]) -> tuple[np.ndarray, np.ndarray]:
+        disp, valid = post(box)
+        return disp * 0.2, valid  # farther than the body: two objects with background between them
+
+    (one,) = join_occluded([right, left], post, 0.04, moments)
+    assert one.box == (0, 100, 130, 160) and one.area == left.area + right.area
+    expect = (left.area * left.centroid_raw + right.area * right.centroid_raw) / (left.area + right.area)
+    assert np.allclose(one.centroid_raw, expect) and np.allclose(one.centroid_rect, expect)
+    assert one.disparity == right.disparity  # the larger part's
+    assert len(join_occluded([left, right], open_ground, 0.04, moments)) == 2
+    assert len(join_occluded([left, _blob((50, 100, 130, 160), 25.0)], post, 0.04, moments)) == 2  # depths
+    assert len(join_occluded([left, _blob((50, 300, 130, 360), 16.0)], post, 0.04, moments)) == 2  # rows
+    assert len(join_occluded([_blob((0, 100, 10, 160), 16.0), _blob((90, 100, 100, 160), 16.0)], post, 0.04,
+                             moments)) == 2  # the gap is most of the union's width
+

@@ -1,0 +1,172 @@
+"""Which of several objects at different depths each pixel of a joint outline belongs to.
+
+A farther object seen past a nearer one's edge (a walker's legs below a ball crossing in front) joins the
+nearer one's outline: the temporal model (|Γ - g B| > ε) and the masks of eq. (9) say only that pixels
+changed, not which object changed them. Its photometry does: a left pixel p of an object at disparity d
+shows the same surface point as the right image at p's rectified position shifted by d (paper eq. 1, the
+parallel rig after rectification, x_r = x_l - d). Each pixel goes to the candidate disparity with the
+smallest windowed absolute difference (winner takes all over the few disparities of the tracks predicted
+there, not over the whole range: a local stereo match with a strong prior).
+
+The other way round, one body may be verified as several blobs: its head past the neck's gap in the same
+candidate box (same_body), or its two sides of a nearer occluder such as a post in two boxes
+(join_occluded); those are joined into one.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import replace
+from typing import TYPE_CHECKING
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from tracker.frames import StereoFrame
+from tracker.rectify import Rectifier
+from tracker.regions import mask_centroid
+
+if TYPE_CHECKING:
+    from tracker.verify import Blob
+
+F32 = NDArray[np.float32]
+BoolA = NDArray[np.bool_]
+Box = tuple[int, int, int, int]
+
+WINDOW_PX = 7  # side of the window the absolute differences are averaged over (px)
+# a rival disparity must differ from the object's by this much: 20 % of d is a depth step of about 20 % of
+# the range (eq. 2, z = b f / d), more than a walker's own depth (±0.3 m at 3 m); a part of the same body
+# predicted apart (a head taken for a track of its own) does not split the body
+MIN_GAP_PX = 2.0
+MIN_GAP_REL = 0.2
+
+
+def right_at(rect: Rectifier, frame: StereoFrame, box: Box, d: float) -> F32:
+    """The right image sampled where each left pixel of `box` would be seen at disparity d (px): the raw
+    right position of the rectified point (x_rect - d, y_rect), bilinear; (y1 - y0, x1 - x0) float32."""
+    x0, y0, x1, y1 = box
+    rc = rect.rect_of_raw[0][y0:y1, x0:x1]
+    qx, qy = rc[..., 0] - np.float32(d), np.ascontiguousarray(rc[..., 1])
+    ur = cv2.remap(rect.maps[1][0], qx, qy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    vr = cv2.remap(rect.maps[1][1], qx, qy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    return np.asarray(cv2.remap(frame.right.astype(np.float32), ur, vr, cv2.INTER_LINEAR,
+                                borderMode=cv2.BORDER_REPLICATE), np.float32)
+
+
+def match_cost(rect: Rectifier, frame: StereoFrame, box: Box, d: float) -> F32:
+    """Mean |Γ_left(p) - Γ_right(p at disparity d)| over a WINDOW_PX square around each pixel of `box`
+    (grey levels, float32 (y1 - y0, x1 - x0))."""
+    x0, y0, x1, y1 = box
+    left = frame.left[y0:y1, x0:x1].astype(np.float32)
+    diff = np.abs(left - right_at(rect, frame, box, d))
+    return np.asarray(cv2.blur(diff, (WINDOW_PX, WINDOW_PX), borderType=cv2.BORDER_REFLECT), np.float32)
+
+
+def own_pixels(rect: Rectifier, frame: StereoFrame, box: Box, obj: BoolA, d: float, others: list[float],
+               min_area: int) -> BoolA:
+    """The pixels of an object's outline `obj` (box pixels) that match at its disparity d at least as well
+    as at every other candidate disparity d_k in `others` (px) at least max(MIN_GAP_PX, MIN_GAP_REL d) away:
+    cost(d) <= min_k cost(d_k) (match_cost);
+    kept as its largest region, holes filled (where the two match alike, as on a surface without texture,
+    the region keeps them). The outline is returned whole when there is no such rival, or when fewer than
+    min_area pixels would be left."""
+    rivals = [o for o in others if abs(o - d) >= max(MIN_GAP_PX, MIN_GAP_REL * d)]
+    if not rivals:
+        return obj
+    own = match_cost(rect, frame, box, d)
+    best_other = np.minimum.reduce([match_cost(rect, frame, box, o) for o in rivals])
+    m8 = (obj & (own <= best_other)).astype(np.uint8)
+    contours, _ = cv2.findContours(m8, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    if not contours:
+        return obj
+    kept = np.zeros(m8.shape, np.uint8)
+    cv2.drawContours(kept, [max(contours, key=cv2.contourArea)], -1, 1, thickness=cv2.FILLED)
+    out = kept > 0
+    return out if int(np.count_nonzero(out)) >= min_area else obj
+
+
+# two regions of one box at one depth are parts of one body when this close: a walker's head and torso
+# are a few centimetres apart (the neck), its arms a centimetre from its sides (px: max(PART_GAP_MIN_PX,
+# PART_GAP_REL x the larger part's height))
+PART_GAP_MIN_PX = 3
+PART_GAP_REL = 0.03
+
+
+def same_body(a: BoolA, d_a: float, b: BoolA, d_b: float) -> bool:
+    """Whether region b (box pixels, disparity d_b px) is a part of the body of region a (d_a): their
+    disparities differ by less than the rival gap of own_pixels (max(MIN_GAP_PX, MIN_GAP_REL d)) and b lies
+    within max(PART_GAP_MIN_PX, PART_GAP_REL h_a) px of a, h_a the rows a spans."""
+    if abs(d_a - d_b) >= max(MIN_GAP_PX, MIN_GAP_REL * max(d_a, d_b)):
+        return False
+    rows = np.flatnonzero(a.any(axis=1))
+    if rows.size == 0:
+        return False
+    gap = max(PART_GAP_MIN_PX, int(round(PART_GAP_REL * (rows[-1] - rows[0] + 1))))
+    k = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * gap + 1, 2 * gap + 1))
+    return bool(np.any((cv2.dilate(a.view(np.uint8), k) > 0) & b))
+
+
+# two blobs at one depth are one body seen on both sides of a nearer occluder (a car behind a post, a
+# walker's legs past a hedge) when the occluder hides at most this share of the wider blob's width between
+# them (px: OCCLUDED_GAP_REL x the union's width) and is nearer by the gap of the verifier's depth test
+OCCLUDED_GAP_REL = 0.5
+OCCLUDER_SHARE = 0.6  # of the known background pixels in the gap that must be nearer than the body
+
+
+def occluded_gap(a: Blob, b: Blob, bg_disparity: Callable[[Box], tuple[F32, BoolA]], min_gap: float) -> bool:
+    """Whether blobs a (left) and b (right) are one body split by a nearer occluder: their disparities
+    within the rival gap (max(MIN_GAP_PX, MIN_GAP_REL d)), their rows overlapping by half the shorter, the
+    columns between them at most OCCLUDED_GAP_REL of the union's width, and there, on the shared rows, at
+    least OCCLUDER_SHARE of the known background (bg_disparity(box) -> (disparity px, valid)) nearer than
+    the body: d_bg > d (1 + min_gap) + 0.5 px, the verifier's test turned round."""
+    d = max(a.disparity, b.disparity)
+    if abs(a.disparity - b.disparity) >= max(MIN_GAP_PX, MIN_GAP_REL * d):
+        return False
+    ax1 = a.box[0] + int(np.flatnonzero(a.mask.any(axis=0))[-1]) + 1  # first column right of a
+    bx0 = b.box[0] + int(np.flatnonzero(b.mask.any(axis=0))[0])
+    ra, rb = (blob.box[1] + np.flatnonzero(blob.mask.any(axis=1)) for blob in (a, b))
+    y0, y1 = max(ra[0], rb[0]), min(ra[-1], rb[-1]) + 1
+    width = max(a.box[2], b.box[2]) - min(a.box[0], b.box[0])
+    if bx0 <= ax1 or bx0 - ax1 > OCCLUDED_GAP_REL * width or y1 - y0 < 0.5 * min(ra.size, rb.size):
+        return False
+    disp, valid = bg_disparity((ax1, y0, bx0, y1))
+    n = int(np.count_nonzero(valid))
+    return n > 0 and int(np.count_nonzero(valid & (disp > d * (1.0 + min_gap) + 0.5))) >= OCCLUDER_SHARE * n
+
+
+def join(a: Blob, b: Blob, area_moments: NDArray[np.float64]) -> Blob:
+    """Two blobs as one: masks painted into the union of their boxes, eq. (10) over the union (raw, and
+    rectified with each pixel's area from area_moments (H, W, 3) [a x, a y, a]), the larger blob's
+    disparity, match and gain."""
+    big = a if a.area >= b.area else b
+    box = (min(a.box[0], b.box[0]), min(a.box[1], b.box[1]), max(a.box[2], b.box[2]), max(a.box[3], b.box[3]))
+    mask = np.zeros((box[3] - box[1], box[2] - box[0]), bool)
+    for blob in (a, b):
+        x0, y0, x1, y1 = blob.box
+        mask[y0 - box[1]:y1 - box[1], x0 - box[0]:x1 - box[0]] |= blob.mask
+    m8 = mask.view(np.uint8)
+    area, c = mask_centroid(m8)
+    sx, sy, sa, _ = cv2.mean(area_moments[box[1]:box[3], box[0]:box[2]], mask=m8)
+    return replace(big, box=box, mask=mask, area=area, centroid_raw=c + (box[0], box[1]),
+                   centroid_rect=np.array([sx / sa, sy / sa]))
+
+
+def join_occluded(blobs: list[Blob], bg_disparity: Callable[[Box], tuple[F32, BoolA]], min_gap: float,
+                  area_moments: NDArray[np.float64]) -> list[Blob]:
+    """The blobs with each pair split by a nearer occluder (occluded_gap) joined in the first's place; the
+    others keep their order."""
+    out = list(blobs)
+    k = 0
+    while k + 1 < len(out):
+        j = next((j for j in range(k + 1, len(out)) if occluded_gap(*_left_right(out[k], out[j]), bg_disparity,
+                                                                   min_gap)), None)
+        if j is None:
+            k += 1
+            continue
+        out[k] = join(out[k], out.pop(j), area_moments)
+    return out
+
+
+def _left_right(a: Blob, b: Blob) -> tuple[Blob, Blob]:
+    return (a, b) if a.centroid_raw[0] <= b.centroid_raw[0] else (b, a)
