@@ -128,9 +128,13 @@ def refine_strip(T: NDArray[np.floating], S: NDArray[np.floating], w: F64 | None
     [k - 1, k + 2). Returns StripFit with d = -p (caller adds X0 - XS) or None if p leaves that range or the
     fit is degenerate (no horizontal texture, non-positive gain).
     """
-    G = _band_gram(T, S, w, k)
+    return refine_gram(_band_gram(T, S, w, k), float(T.size) if w is None else float(w.sum()), p, k)
+
+
+def refine_gram(G: list[list[float]], wsum: float, p: float, k: int) -> StripFit | None:
+    """refine_strip from the weighted Gram matrix (7, 7) of its band windows k-2 .. k+3 and the template
+    (_band_gram; wsum: the sum of the weights): the Gauss-Newton iteration alone."""
     tt = G[6][6]
-    wsum = float(T.size) if w is None else float(w.sum())
     for it in range(_MAX_ITER + 1):
         i = math.floor(p)
         if not k - 1 <= i <= k + 1:

@@ -123,10 +123,12 @@ def _right_shadow(nearer: BoolA, bg_disparity: F32, disparity: float) -> BoolA:
     if not nearer.any():
         return nearer
     gap = min(int(np.ceil(float(bg_disparity[nearer].max()) - disparity)), nearer.shape[1] - 1)
-    out = nearer.copy()
-    for s in range(1, gap + 1):
-        out[:, s:] |= nearer[:, :-s]
-    return out
+    if gap <= 0:
+        return nearer
+    # out[:, x] = nearer[:, x - gap .. x] OR-ed: a dilation by a row of gap + 1 anchored at its right end
+    row = np.ones((1, gap + 1), np.uint8)
+    return np.asarray(cv2.dilate(nearer.view(np.uint8), row, anchor=(gap, 0), borderType=cv2.BORDER_CONSTANT,
+                                 borderValue=0), np.uint8).view(bool)
 
 
 def padded(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, int], pad: int = 2, left: int = 2
