@@ -68,14 +68,14 @@ def part_disparities(left: U8, right: U8, core: NDArray[np.generic], off: int, d
     for j in range(6):  # band window j: strip columns k - 2 + j + column
         A[:, j] = right[rows, k - 2 + j + cols]
     A[:, 6] = left[rows, off + cols]
-    parts, starts, counts = np.unique(lab, return_index=True, return_counts=True)
-    sums = np.add.reduceat(A, starts)
-    grams = np.add.reduceat(A[:, :, None] * A[:, None, :], starts)  # (parts, 7, 7)
+    _, starts, counts = np.unique(lab, return_index=True, return_counts=True)
     out = []
-    for g, s1, m in zip(grams, sums, counts, strict=True):
+    for a, m in zip(starts, counts, strict=True):
         if m < 8:
             continue
-        fit = refine_gram((g - np.outer(s1, s1) / m).tolist(), float(m), p0, k)
+        P = A[a:a + m]
+        s1 = P.sum(axis=0)
+        fit = refine_gram((P.T @ P - np.outer(s1, s1) / m).tolist(), float(m), p0, k)
         if fit is not None and abs(fit.d + p0) <= 1.0 and fit.score >= min_score:
             out.append(off + fit.d)
     return out
