@@ -11,7 +11,7 @@ On the scenes of `tmeye eval` these made the disparity's error 1.3 (walk) to 20 
 matcher's 1-σ (0.026 and 0.137 px rms against 0.008 and 0.006 px).
 
 All of these show in how the disparities of parts of the region disagree: the region is cut into a grid of
-`COLUMNS` x `ROWS` parts about the centre of the window the matcher uses, each part matched on its own, and
+`COLUMNS` x `ROWS` parts over the window the matcher uses, each part refined on its own, and
 the standard error of their mean, s / √n (s their sample standard deviation, n the parts matched), is the
 1-σ of the whole region's disparity: the whole's fit is about their mean. The grid has 8 parts so that the
 σ estimate itself is not too noisy (with 4 parts the normalised errors follow Student's t with 3 degrees
@@ -27,9 +27,7 @@ from numpy.typing import NDArray
 
 from tracker.stereo import refine_gram
 
-BoolA = NDArray[np.bool_]
 U8 = NDArray[np.uint8]
-F64 = NDArray[np.float64]
 COLUMNS, ROWS = 4, 2
 MIN_PARTS = 5
 
