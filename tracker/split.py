@@ -135,11 +135,11 @@ def occluded_gap(a: Blob, b: Blob, bg_disparity: Callable[[Box], tuple[F32, Bool
     return n > 0 and int(np.count_nonzero(valid & (disp > d * (1.0 + min_gap) + 0.5))) >= OCCLUDER_SHARE * n
 
 
-def join(a: Blob, b: Blob, area_moments: NDArray[np.float64]) -> Blob:
+def join(a: Blob, b: Blob, area_moments: NDArray[np.float64], lead: Blob | None = None) -> Blob:
     """Two blobs as one: masks painted into the union of their boxes, eq. (10) over the union (raw, and
-    rectified with each pixel's area from area_moments (H, W, 3) [a x, a y, a]), the larger blob's
-    disparity, match and gain."""
-    big = a if a.area >= b.area else b
+    rectified with each pixel's area from area_moments (H, W, 3) [a x, a y, a]), the disparity, match and
+    gain of `lead` (by default the larger blob)."""
+    big = lead if lead is not None else (a if a.area >= b.area else b)
     box = (min(a.box[0], b.box[0]), min(a.box[1], b.box[1]), max(a.box[2], b.box[2]), max(a.box[3], b.box[3]))
     mask = np.zeros((box[3] - box[1], box[2] - box[0]), bool)
     for blob in (a, b):

@@ -9,7 +9,7 @@ exactly; Ivanov, Bobick and Liu's verification by warping in both directions).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import cv2
 import numpy as np
@@ -21,7 +21,7 @@ from tracker.disparity_sigma import part_disparities
 from tracker.frames import StereoFrame
 from tracker.rectify import Rectifier
 from tracker.regions import background_disparity, hints_around, mask_centroid, nearest_hint, row_thirds
-from tracker.split import own_pixels, same_body
+from tracker.split import join, own_pixels, same_body
 from tracker.stereo import RegionMatch, match_region, refine_region
 
 U8 = NDArray[np.uint8]
@@ -179,8 +179,9 @@ class Verifier:
             blob, changed = got
             part_of = next((k for k, f in enumerate(found)
                             if same_body(f.mask, f.disparity, blob.mask, blob.disparity)), None)
-            if part_of is not None:  # a part of a body found before (a head past the neck's gap): one object
-                blob = self._joined(found.pop(part_of), blob)
+            if part_of is not None:  # a part of a body found before (a head past the neck's gap): one object,
+                first = found.pop(part_of)  # with the disparity and match of the part verified first
+                blob = join(first, blob, self.rect.area_moments, lead=first)
             found.append(blob)
             # a second object in the same box must be substantial: not the rim left around the first
             min_area = max(min_area, 4 * cfg.min_area_px, blob.area // 10)
@@ -189,17 +190,6 @@ class Verifier:
             if len(found) == max_objects or int(np.count_nonzero(m_raw)) < min_area:
                 break
         return found
-
-    def _joined(self, a: Blob, b: Blob) -> Blob:
-        """Two blobs of one box as one: the union of their masks, its centroids (eq. 10), a's disparity
-        (the larger part's, verified first) and match."""
-        x0, y0, x1, y1 = a.box
-        obj = a.mask | b.mask
-        m8 = obj.view(np.uint8)
-        area, c_box = mask_centroid(m8)
-        sx, sy, sa, _ = cv2.mean(self.rect.area_moments[y0:y1, x0:x1], mask=m8)
-        return replace(a, mask=obj, area=area, centroid_raw=c_box + (x0, y0), centroid_rect=np.array([sx / sa,
-                                                                                                        sy / sa]))
 
     def _too_small_to_be_new(self, area: int, hint: float | None) -> bool:
         """While the cameras move, a region no track is predicted in must cover moving_min_cells · stride²
@@ -274,8 +264,8 @@ class Verifier:
 
     def part_disparities(self, frame: StereoFrame, blob: Blob) -> list[float]:
         """The disparities (px) of the parts of a verified blob (tracker.disparity_sigma.part_disparities:
-        the window `match_object` uses cut into a grid, each part one Gauss-Newton step from the blob's
-        disparity on the same strips); the parts that do not match are left out."""
+        the window `match_object` uses cut into a grid, each part refined from the blob's disparity on the
+        same strips); the parts that do not match are left out."""
         strips = self._strips(frame, blob.box, blob.mask, blob.disparity)
         if strips is None:
             return []
