@@ -88,6 +88,9 @@ class Status(BaseModel):
     deferred_boxes: int = Field(0, description="candidate boxes the tracker put off to the next frame to keep a "
                                                "busy frame within its time budget (setting verify_budget_ms), "
                                                "since the start")
+    reused_sigma: int = Field(0, description="targets whose costlier 1-σ terms a busy frame took from the same "
+                                             "track's recent frame instead of working them out (setting "
+                                             "sigma_budget_ms), since the start")
     source_faults: int = Field(0, description="source faults (a read that failed or stalled) since the start")
     source: dict[str, Any]
     servo: ServoStatus

@@ -36,6 +36,11 @@ class Settings(BaseSettings):
                                     "than this (ms); the rest wait for the next frame, where they come first, and "
                                     "are counted in the status (deferred_boxes). Bounds a busy frame's latency; "
                                     "0: no bound")
+    sigma_budget_ms: float = Field(4.0, ge=0, le=1000, description="real time: a tracked target's costlier 1-σ "
+                                   "terms (the scatter of its parts' disparities, a partly seen or warped outline) "
+                                   "are worked out afresh only while the frame's tracker step is younger than this "
+                                   "(ms), else taken from the same track within the last 15 frames; counted in the "
+                                   "status (reused_sigma). Bounds a busy frame's latency; 0: every frame")
     token_ttl_s: int = Field(12 * 3600, ge=5, le=30 * 86400, description="absolute session lifetime (s): a login "
                                                                        "ends this long after it was made")
     session_idle_s: int = Field(30 * 60, ge=2, le=30 * 86400, description="idle session timeout (s): a session "

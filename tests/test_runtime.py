@@ -147,16 +147,18 @@ def test_a_jog_moves_rate_times_duration_and_repeated_jogs_keep_moving() -> None
     assert sc.goal is not None and sc.goal[0] == pytest.approx(20.0)  # 30 frames at 20 deg/s
 
 
-def test_the_verify_budget_applies_in_real_time_only() -> None:
-    for realtime, want in ((True, 4.0), (False, None)):
+def test_the_verify_and_sigma_budgets_apply_in_real_time_only() -> None:
+    for realtime, want, want_sigma in ((True, 4.0, 3.0), (False, None, None)):
         rt = Runtime(RuntimeConfig(scenario="walk", servo=None, realtime=realtime, max_frames=2,
-                                   verify_budget_ms=4.0))
+                                   verify_budget_ms=4.0, sigma_budget_ms=3.0))
         rt.start()
         try:
             assert rt.comp is not None and rt.comp.pipeline.schedule.budget_ms == want
+            assert rt.comp.pipeline.sigma_schedule.budget_ms == want_sigma
         finally:
             rt.stop()
         assert rt.status()["deferred_boxes"] == rt.deferred_boxes >= 0
+        assert rt.status()["reused_sigma"] >= 0
 
 
 def test_tuning_applies_from_the_next_frame_and_rejects_bad_fields() -> None:

@@ -1,10 +1,11 @@
-"""tracker.schedule: the frame's time budget for verifying candidate boxes (a fake clock; no timing)."""
+"""tracker.schedule: the frame's time budget for verifying candidate boxes and for working out the costly
+1-σ terms (a fake clock; no timing)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from tracker.schedule import Box, VerifySchedule
+from tracker.schedule import Box, SigmaSchedule, SigmaTerms, VerifySchedule
 
 TRACKED: Box = (100, 100, 140, 180)  # holds the prediction below
 BIG: Box = (300, 50, 400, 250)
@@ -62,3 +63,54 @@ def test_within_the_budget_the_results_are_those_of_no_budget() -> None:
     boxes = [SMALL, TRACKED, BIG, MID]
     _, results, put_off = run(VerifySchedule(4.0, clock), clock, boxes)
     assert results == boxes and put_off == 0
+
+
+class Terms:
+    """A fake SigmaTerms worker that counts its calls and advances the clock by `cost` s."""
+
+    def __init__(self, clock: Clock, cost: float):
+        self.clock, self.cost, self.calls = clock, cost, 0
+
+    def __call__(self) -> SigmaTerms:
+        self.calls += 1
+        self.clock.t += self.cost
+        return SigmaTerms(0.01 * self.calls, (0.1 * self.calls, 0.2 * self.calls))
+
+
+def test_sigma_terms_are_worked_out_every_frame_without_a_budget() -> None:
+    clock = Clock(0.0)
+    s = SigmaSchedule(None, clock=clock)
+    work = Terms(clock, 1.0)
+    clock.t = 100.0  # however late the frame
+    got = [s.terms(7, i, 0.0, work) for i in range(5)]
+    assert work.calls == 5 and got[-1] == SigmaTerms(0.05, (0.5, 1.0)) and s.reused == 0
+
+
+def test_a_late_frame_keeps_a_tracked_targets_recent_terms_and_works_out_new_or_old_ones() -> None:
+    clock = Clock(0.0)
+    s = SigmaSchedule(budget_ms=4.0, max_age=3, clock=clock)
+    work = Terms(clock, 0.0)
+    first = s.terms(1, 10, 0.0, work)  # on time: worked out
+    clock.t = 0.005  # 5 ms into the step: late
+    assert s.terms(1, 11, 0.0, work) is first and s.terms(1, 13, 0.0, work) is first  # 1 and 3 frames old
+    assert work.calls == 1 and s.reused == 2
+    newer = s.terms(1, 14, 0.0, work)  # 4 frames old: worked out even though late
+    assert work.calls == 2 and newer != first
+    s.terms(2, 14, 0.0, work)  # a new track: always worked out
+    assert work.calls == 3
+    clock.t = 0.001  # on time again: worked out afresh
+    s.terms(1, 15, 0.0, work)
+    assert work.calls == 4 and s.reused == 2
+
+
+def test_sigma_terms_of_ended_tracks_are_forgotten() -> None:
+    clock = Clock(0.0)
+    s = SigmaSchedule(budget_ms=1.0, clock=clock)
+    work = Terms(clock, 0.0)
+    s.terms(1, 0, 0.0, work)
+    s.terms(2, 0, 0.0, work)
+    s.keep_only([2])
+    clock.t = 1.0  # late
+    s.terms(1, 1, 0.0, work)  # forgotten: worked out again
+    s.terms(2, 1, 0.0, work)  # kept
+    assert work.calls == 3 and s.reused == 1

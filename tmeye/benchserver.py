@@ -153,6 +153,7 @@ def _report(m: dict[str, Any], seconds: float, cpu: float) -> dict[str, Any]:
     return {"seconds": seconds, "clients": len(rates), "source": s1["source"], "servo_mode": s1["servo"].get("mode"),
             "frames": frames, "skipped_frames": skipped, "skipped_pct": round(100.0 * skipped / frames, 3),
             "deferred_boxes": s1.get("deferred_boxes", 0) - s0.get("deferred_boxes", 0),
+            "reused_sigma": s1.get("reused_sigma", 0) - s0.get("reused_sigma", 0),
             "fps": s1["fps"], "event_loop_lag_ms": s1["event_loop_lag_ms"],
             "ws_send_latency_ms": s1["ws_send_latency_ms"], "ws_delivery_ms": s1["ws_delivery_ms"],
             "cpu_cores": round(cpu, 3),

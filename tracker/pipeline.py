@@ -23,7 +23,7 @@ from tracker.geometry import StereoRig
 from tracker.localize import Localization, Localizer
 from tracker.outline import OutlineConfig, warped_outline_sigma_px
 from tracker.rectify import Rectifier
-from tracker.schedule import VerifySchedule
+from tracker.schedule import SigmaSchedule, SigmaTerms, VerifySchedule
 from tracker.split import join_occluded
 from tracker.temporal import TemporalConfig, TemporalDetector, without_duplicates
 from tracker.tracks import MultiTracker, TrackerConfig
@@ -69,10 +69,13 @@ class Pipeline:
 
     def __init__(self, rig: StereoRig, detector: DetectorConfig | None = None,
                  tracker: TrackerConfig | None = None, origin: F64 | None = None,
-                 temporal: TemporalConfig | None = None, verify_budget_ms: float | None = None):
+                 temporal: TemporalConfig | None = None, verify_budget_ms: float | None = None,
+                 sigma_budget_ms: float | None = None):
         """verify_budget_ms: in real time, candidate boxes that hold no track's prediction are verified only
         while the frame's step is younger than this (ms); the others wait for the next frame (None: all are
-        verified, as offline evaluation needs for repeatable results)."""
+        verified, as offline evaluation needs for repeatable results). sigma_budget_ms: in real time, a
+        tracked target's costly 1-σ terms are worked out afresh only while the step is younger than this
+        (ms), else taken from a recent frame (tracker.schedule.SigmaSchedule; None: every frame)."""
         self.rig = rig
         self.rect = Rectifier(rig)
         self.bg = BackgroundDepth(self.rect, near_m=(detector or DetectorConfig()).near_m)
@@ -82,6 +85,7 @@ class Pipeline:
         self.localizer = Localizer(self.rect, origin)
         self.tracker = MultiTracker(tracker)
         self.schedule = VerifySchedule(verify_budget_ms)
+        self.sigma_schedule = SigmaSchedule(sigma_budget_ms)
         self.visibility = VisibilityConfig()
         self.outline = OutlineConfig()
         self._last_gain = 1.0
@@ -133,11 +137,12 @@ class Pipeline:
         blobs = join_occluded(blobs, lambda box: self._background_disparity(frame, box),  # one body, two sides
                               self.subtractor.cfg.min_depth_gap, self.rect.area_moments)
         t2 = time.perf_counter()
-        locs = [self.localizer.locate(b.centroid_rect, b.disparity, self._disparity_sigma(frame, b), b.area,
-                                      frame.gimbal, self._centroid_extra(frame, b, blobs)) for b in blobs]
-        t3 = time.perf_counter()
         obs = np.array([[b.centroid_raw[0], b.centroid_raw[1], b.disparity] for b in blobs]).reshape(-1, 3)
-        ids = self.tracker.update(frame.t, obs)
+        ids = self.tracker.update(frame.t, obs)  # from centroids and disparities alone (not their σ)
+        self.sigma_schedule.keep_only([tr.track_id for tr in self.tracker.tracks])
+        t_ids = time.perf_counter()
+        locs = [self._locate(frame, b, blobs, i, t0) for b, i in zip(blobs, ids, strict=True)]
+        t3 = time.perf_counter()
         self.subtractor.update_floor(self._foreground_low(blobs))
         gain = self.temporal.gain or (max(blobs, key=lambda b: b.area).gain if blobs else self._last_gain)
         self._last_gain = gain
@@ -148,8 +153,9 @@ class Pipeline:
             if learnt is not None:
                 self._relearn(frame, learnt)
         t4 = time.perf_counter()
-        for name, a, b in zip(STAGES, (t0, t1, t2, t3), (t1, t2, t3, t4), strict=True):
+        for name, a, b in zip(STAGES, (t0, t1, t_ids, t3), (t1, t2, t3, t4), strict=True):
             ms[name] = (b - a) * 1e3
+        ms["track"] += (t_ids - t2) * 1e3
         dets = tuple(Detection(b, loc, i) for b, loc, i in zip(blobs, locs, ids, strict=True))
         pid = self.tracker.primary_id
         primary = next((d for d in dets if d.track_id == pid), None)
@@ -160,11 +166,18 @@ class Pipeline:
         cm = self.subtractor.correspondence(0, frame.gimbal, box)
         return cm.disparity, cm.valid
 
+    def _locate(self, frame: StereoFrame, b: Blob, blobs: list[Blob], track_id: int, start: float) -> Localization:
+        """eq. (1-2) for a blob, with its 1-σ: the matcher's, and the costlier terms (SigmaTerms)."""
+        terms = self.sigma_schedule.terms(track_id, frame.index, start, lambda: SigmaTerms(
+            self._disparity_sigma(frame, b), self._centroid_extra(frame, b, blobs)))
+        return self.localizer.locate(b.centroid_rect, b.disparity, max(b.disparity_sigma, terms.disparity_px),
+                                     b.area, frame.gimbal, terms.centroid_px)
+
     def _disparity_sigma(self, frame: StereoFrame, b: Blob) -> float:
-        """The disparity's 1-σ (px): the matcher's own, or the scatter of the disparities of the blob's
-        parts where larger (tracker.disparity_sigma: correlated residuals, interpolation, a slanted
-        surface; it includes the pixel noise the matcher's σ stands for)."""
-        return max(b.disparity_sigma, scatter_sigma(self.verifier.part_disparities(frame, b)))
+        """The scatter of the disparities of the blob's parts (px; tracker.disparity_sigma: correlated
+        residuals, interpolation, a slanted surface; it includes the pixel noise the matcher's σ stands
+        for): the disparity's 1-σ where larger than the matcher's own."""
+        return scatter_sigma(self.verifier.part_disparities(frame, b))
 
     def _centroid_extra(self, frame: StereoFrame, b: Blob, blobs: list[Blob]) -> tuple[float, float]:
         """The centroid's further 1-σ (px, x and y): where the target is seen in part, and where its outline

@@ -1,4 +1,5 @@
-"""Which candidate boxes a frame verifies, and in what order, when the frame has a time budget.
+"""Which candidate boxes a frame verifies, and in what order, when the frame has a time budget
+(`VerifySchedule`); and whose costly 1-σ terms are worked out afresh (`SigmaSchedule`).
 
 Verification (tracker.verify) costs 0.3 to 1.5 ms per box, so a frame with many candidate boxes (foliage,
 a light change, the residuals of a moving view) can take several times the usual time. In real time the
@@ -14,6 +15,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import TypeVar
 
 import numpy as np
@@ -67,3 +69,47 @@ class VerifySchedule:
             done[i] = verify(b)
         self._put_off = tuple(put_off)
         return [r for i in range(len(boxes)) for r in done.get(i, [])], len(put_off)
+
+
+@dataclass(frozen=True)
+class SigmaTerms:
+    """The costly terms of a target's 1-σ (tracker.pipeline): disparity_px, the scatter of its parts'
+    disparities (px, tracker.disparity_sigma); centroid_px, the centroid's further 1-σ (px, x and y) where
+    it is seen in part or its outline is drawn by warping (tracker.visibility, tracker.outline)."""
+
+    disparity_px: float
+    centroid_px: tuple[float, float]
+
+
+class SigmaSchedule:
+    """Which targets have their SigmaTerms worked out afresh in a frame with a time budget.
+
+    The terms cost about 1 ms a target; they change slowly (the target's size, texture, what hides it).
+    With a budget, a tracked target whose terms were worked out within the last `max_age` frames keeps
+    them once the frame's step is older than budget_ms; a new track, or terms older than that, are always
+    worked out. budget_ms None: always worked out (evaluations, offline)."""
+
+    def __init__(self, budget_ms: float | None = None, max_age: int = 15,
+                 clock: Callable[[], float] = time.perf_counter):
+        self.budget_ms = budget_ms
+        self.max_age = max_age
+        self.clock = clock
+        self._kept: dict[int, tuple[int, SigmaTerms]] = {}  # track id -> (frame index, terms)
+        self.reused = 0  # terms taken from an earlier frame (counted for the status)
+
+    def terms(self, track_id: int, index: int, start: float, work: Callable[[], SigmaTerms]) -> SigmaTerms:
+        """The track's terms at frame `index`: work() when due, else those kept. start: the step's start
+        (clock seconds)."""
+        kept = self._kept.get(track_id)
+        if (self.budget_ms is not None and kept is not None and 0 <= index - kept[0] <= self.max_age
+                and (self.clock() - start) * 1e3 > self.budget_ms):
+            self.reused += 1
+            return kept[1]
+        got = work()
+        self._kept[track_id] = (index, got)
+        return got
+
+    def keep_only(self, track_ids: Sequence[int]) -> None:
+        """Forget the terms of tracks not in track_ids (ended)."""
+        live = set(track_ids)
+        self._kept = {i: v for i, v in self._kept.items() if i in live}

@@ -77,7 +77,8 @@ def compose(cfg: RuntimeConfig, tuning: TrackerTuning | None = None, rig: Stereo
 def pipeline(rig: StereoRig, cfg: RuntimeConfig, tuning: TrackerTuning, fps: float) -> Pipeline:
     with rig_errors(cfg):
         return Pipeline(rig, replace(tuning.detector, fps=fps), tuning.tracks, origin=np.array(cfg.origin, float),
-                        verify_budget_ms=cfg.verify_budget_ms if cfg.realtime else None)
+                        verify_budget_ms=cfg.verify_budget_ms if cfg.realtime else None,
+                        sigma_budget_ms=cfg.sigma_budget_ms if cfg.realtime else None)
 
 
 @contextmanager

@@ -24,7 +24,9 @@ class RuntimeConfig:
     counted); otherwise run as fast as possible. max_frames: stop after this many processed frames.
     origin: (X, Y, Z) m, the point about which r, θ, φ are given. verify_budget_ms: with realtime, the
     tracker step's time budget for candidate boxes that hold no track's prediction (None: no bound; see
-    tracker.schedule). baseline_limits_m: the plausible
+    tracker.schedule). sigma_budget_ms: with realtime, a tracked target's costly 1-σ terms are worked out
+    afresh only while the step is younger than this, else taken from a recent frame (None: every frame;
+    tracker.schedule.SigmaSchedule). baseline_limits_m: the plausible
     baselines (m) a rig file is checked against (default tracker.rigcheck.BASELINE_LIMITS_M, 1 cm to 10 m)."""
 
     source: str = "sim"
@@ -37,6 +39,7 @@ class RuntimeConfig:
     loop_source: bool = True
     max_frames: int | None = None
     verify_budget_ms: float | None = None
+    sigma_budget_ms: float | None = None
     origin: tuple[float, float, float] = (0.0, 0.0, 0.0)
     baseline_limits_m: tuple[float, float] | None = None
     start: float | None = None

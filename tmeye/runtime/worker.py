@@ -210,6 +210,7 @@ class Runtime:
         return {"state": self.state, "frame": ev.frame_no if ev else None, "fps": round(self.fps, 2),
                 "frames_processed": self.frames, "skipped_frames": self.skipped, "frame_errors": self.frame_errors,
                 "deferred_boxes": self.deferred_boxes,
+                "reused_sigma": self.comp.pipeline.sigma_schedule.reused if self.comp else 0,
                 "source_faults": self.source_health.faults,
                 "source": describe_source(self.comp) if self.comp else {"kind": self.config.source},
                 "servo": servo, "subscribers": self.hub.subscribers, "subscriptions": self.hub.stats(),

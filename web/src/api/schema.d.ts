@@ -2106,6 +2106,12 @@ export interface components {
              */
             deferred_boxes: number;
             /**
+             * Reused Sigma
+             * @description targets whose costlier 1-σ terms a busy frame took from the same track's recent frame instead of working them out (setting sigma_budget_ms), since the start
+             * @default 0
+             */
+            reused_sigma: number;
+            /**
              * Source Faults
              * @description source faults (a read that failed or stalled) since the start
              * @default 0
