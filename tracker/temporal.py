@@ -34,7 +34,8 @@ from tracker.detect import Box, StereoSubtractor
 from tracker.frames import StereoFrame
 from tracker.rectify import Rectifier
 from tracker.regions import background_disparity, mask_centroid, nearest_hint
-from tracker.verify import Blob, Verifier, largest_region, temporal_outline
+from tracker.silhouette import largest_region, temporal_outline
+from tracker.verify import Blob, Verifier
 
 F32 = NDArray[np.float32]
 F64 = NDArray[np.float64]
