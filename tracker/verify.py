@@ -21,9 +21,6 @@ from tracker.disparity_sigma import part_disparities
 from tracker.frames import StereoFrame
 from tracker.rectify import Rectifier
 from tracker.regions import background_disparity, hints_around, mask_centroid, nearest_hint, row_thirds
-from tracker.silhouette import NEAR as _NEAR
-from tracker.silhouette import largest as _largest
-from tracker.silhouette import temporal_outline
 from tracker.split import join, own_pixels, same_body
 from tracker.stereo import RegionMatch, match_region, refine_region
 
@@ -60,12 +57,73 @@ def _key_mask(key: U8, other: U8, mx: NDArray[np.float32], my: NDArray[np.float3
     return np.asarray((resid > eps) & valid)
 
 
+_CLOSE = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
+
+
+def _largest(mask: BoolA, close: bool = False, every: bool = False) -> BoolA:
+    """The largest 8-connected component (or with `every`, all of them) with holes filled; with `close`,
+    narrow channels into the holes are sealed first (a morphological closing), so those are filled too."""
+    m8 = mask.astype(np.uint8)
+    if close:
+        m8 = np.asarray(cv2.morphologyEx(m8, cv2.MORPH_CLOSE, _CLOSE), np.uint8) | m8
+    contours, _ = cv2.findContours(m8, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    if not contours:
+        return np.zeros_like(mask)
+    keep = list(contours) if every else [max(contours, key=cv2.contourArea)]
+    out = np.zeros(mask.shape, np.uint8)
+    cv2.drawContours(out, keep, -1, 1, thickness=cv2.FILLED)
+    return out.astype(bool)
+
+
+def largest_region(mask: BoolA) -> BoolA:
+    """The largest 8-connected component of a mask, holes filled."""
+    return _largest(mask)
+
+
 _CORE = np.ones((3, 3), np.uint8)
 _MATCH_HALF = (24, 16)  # half width and height (px) of the largest window matched
 _MATCH_HALF_SLANT = (12, 8)  # the same when the larger ones match nowhere (slanted faces, near)
 # weighted ZNCC a region's match needs: a whole object scores 0.95-0.99; a sliver beside an occluder that
 # catches the occluder's edge scores lower and would give a wrong disparity
 _MIN_SCORE = 0.8
+_RING = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (9, 9))
+_NEAR = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
+
+
+def temporal_outline(key: U8, bg: NDArray[np.float32], dev: NDArray[np.float32], core: BoolA,
+                      region: BoolA, eps: int) -> tuple[BoolA, float, BoolA]:
+    """The object's exact outline from the temporal model, inside a stereo region.
+
+    core: pixels both keys agree are the object (left-key ∩ warped right-key mask: no occlusion shadow,
+    but holes where the object overlaps its own shadow); region: where the object may be (the keys'
+    union, or the left-key mask: the object and its shadow). The global gain g is Σ Γ / Σ B on the box's
+    ring outside the region; a pixel is the object if |Γ - g B| > ε in `core`, or > ε + 3 D elsewhere in
+    `region` or a two-pixel rim, where D is the background's own mean deviation: a shadow falls on
+    unchanged background (|Γ - g B| small) unless the background moves (foliage, large D).
+    Returns the mask, g (1.0 when the ring is too small) and the box's pixels that changed at the strict
+    threshold."""
+    grown = cv2.dilate((region | core).astype(np.uint8), _NEAR) > 0
+    band = grown & ~core
+    ring = ((cv2.dilate(grown.view(np.uint8), _RING) == 0) & (bg > 8.0)).view(np.uint8)
+    g = 1.0
+    if cv2.countNonZero(ring) >= 20:
+        g = cv2.mean(key, mask=ring)[0] / cv2.mean(bg, mask=ring)[0]  # Σ Γ / Σ B over the ring
+    diff = _change(key, bg, g)
+    changed = diff > _strict_limit(dev, g, eps)
+    inside = core & (diff > eps)
+    return _largest(inside | (band & changed), close=True), g, changed
+
+
+def _change(key: U8, bg: NDArray[np.float32], g: float) -> NDArray[np.float32]:
+    """|Γ - g B|: how far each pixel is from the temporal background at global gain g."""
+    return np.asarray(np.abs(key.astype(np.float32) - np.float32(g) * bg), np.float32)
+
+
+def _strict_limit(dev: NDArray[np.float32], g: float, eps: int) -> NDArray[np.float32]:
+    """ε + 3 g D: the change a pixel must exceed where the background itself moves by D on average."""
+    return np.asarray(np.float32(eps) + np.float32(3.0 * g) * dev, np.float32)
+
+
 _TAKEN = np.ones((5, 5), np.uint8)
 
 
@@ -158,7 +216,7 @@ class Verifier:
             bg, dev = model
             obj, gain, changed = temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1],
                                                    dev[y0:y1, x0:x1], np.zeros_like(m_left), m_left & free,
-                                                   cfg.epsilon, fill=True)
+                                                   cfg.epsilon)
             if len(around) > 1:  # other tracks predicted about the region: keep the pixels at this one's d
                 obj = own_pixels(self.rect, frame, box, obj, d_hint, around, cfg.min_area_px)
             d0 = d_hint
@@ -171,8 +229,7 @@ class Verifier:
             if model is not None:  # cameras still: the temporal model draws the exact outline
                 bg, dev = model
                 obj, gain, changed = temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1],
-                                                       dev[y0:y1, x0:x1], obj, either & free, cfg.epsilon,
-                                                       fill=True)
+                                                       dev[y0:y1, x0:x1], obj, either & free, cfg.epsilon)
         fine = self.match_object(frame, box, obj, d0)
         if fine is None:
             return None
