@@ -18,7 +18,8 @@ def test_width_and_wrapped_degrees() -> None:
 def test_bodies_report_angles_against_the_seen_surface_and_plates_do_not() -> None:
     body = run_scenario("walk:body", frames=6).to_json()
     assert body["wide_frames"] == 6.0
-    for key in ("azimuth", "elevation", "azimuth_surface", "elevation_surface"):
+    for key in ("azimuth", "elevation", "azimuth_surface", "elevation_surface", "azimuth_silhouette",
+                "elevation_silhouette"):
         assert np.isfinite(float(body[f"{key}_rmse_wide_deg"]))  # type: ignore[arg-type]
     plate = run_scenario("walk", frames=6).to_json()
     assert "wide_frames" not in plate and "azimuth_surface_rmse_wide_deg" not in plate

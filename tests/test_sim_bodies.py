@@ -4,10 +4,13 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+import cv2
 import numpy as np
 import pytest
 
 from tracker.frames import GimbalState
+from tracker.geometry import gimbal_rotation
+from tracker.rectify import Rectifier
 from tracker.sim.bodies import SPHERE_R_M, BodyObject, Part, body_texture
 from tracker.sim.render import SimRenderer
 from tracker.sim.rig import default_rig
@@ -157,3 +160,27 @@ def test_truth_read_frames_later_equals_truth_read_at_once() -> None:
             assert (a.surface_world is None) == (b.surface_world is None)
             if a.surface_world is not None and b.surface_world is not None:
                 assert np.allclose(a.surface_world, b.surface_world)
+
+
+def test_the_silhouette_point_lies_on_the_ray_eq_10_measures_on_the_true_silhouette() -> None:
+    # the point the tracker measures: eq. (10)'s area-weighted centroid of the body's left pixels in
+    # rectified coordinates (tracker.rectify.Rectifier.area_moments), turned back into the left camera
+    sim = SimRig(get_scenario("walk:body"))
+    for _ in range(3):
+        sf = sim.step()
+    tr = sf.truth
+    tt = tr.target(1)
+    assert tt is not None and tt.silhouette_world is not None and tt.surface_world is not None
+    rect = Rectifier(sim.rig)
+    sx, sy, sa, _ = cv2.mean(rect.area_moments, mask=(tr.ids_left == 1).view(np.uint8))
+    v = rect.R1.T @ np.array([(sx / sa - rect.cx) / rect.f, (sy / sa - rect.cy) / rect.f, 1.0])
+    R_wr = gimbal_rotation(tr.gimbal.pan_deg, tr.gimbal.tilt_deg)
+    c = R_wr @ sim.rig.left.c
+    X = sim.rig.left.R_rc @ (R_wr.T @ (tt.silhouette_world - c))
+    assert np.allclose(X[:2] / X[2], v[:2] / v[2], atol=0.1 / rect.f)  # within 0.1 px
+    # the surface mean is off that ray by more, at about the same distance
+    S = sim.rig.left.R_rc @ (R_wr.T @ (tt.surface_world - c))
+    assert np.linalg.norm(S[:2] / S[2] - v[:2] / v[2]) > 0.3 / rect.f
+    assert abs(np.linalg.norm(X) - np.linalg.norm(S)) < 0.05
+    plate = SimRig(get_scenario("walk")).step().truth.target(1)
+    assert plate is not None and plate.silhouette_world is None

@@ -10,7 +10,7 @@ from tracker.frames import StereoFrame
 from tracker.geometry import Camera, StereoRig
 from tracker.rectify import Rectifier
 from tracker.regions import hints_around
-from tracker.split import join_occluded, match_cost, own_pixels, same_body
+from tracker.split import join_occluded, join_parts, match_cost, own_pixels, same_body
 from tracker.verify import Blob
 
 W, H = 640, 480
@@ -176,3 +176,17 @@ def test_one_body_seen_on_both_sides_of_a_nearer_post_is_joined() -> None:
     assert len(join_occluded([_blob((0, 100, 10, 160), 16.0), _blob((90, 100, 100, 160), 16.0)], post, 0.04,
                              moments)) == 2  # the gap is most of the union's width
 
+
+
+def test_parts_of_one_body_verified_from_different_boxes_are_joined() -> None:
+    yy, xx = np.mgrid[0:H, 0:W].astype(np.float64)
+    moments = np.dstack([xx, yy, np.ones_like(xx)])
+    torso, legs = _blob((100, 100, 160, 200), 20.0), _blob((105, 202, 155, 300), 20.4)  # 2 px apart: the waist
+    other = _blob((300, 100, 360, 200), 20.0)  # another object at the same depth, far to the side
+    (one, rest) = join_parts([torso, other, legs], moments)
+    assert one.box == (100, 100, 160, 300) and one.area == torso.area + legs.area and rest is other
+    expect = (torso.area * torso.centroid_raw + legs.area * legs.centroid_raw) / (torso.area + legs.area)
+    assert np.allclose(one.centroid_raw, expect) and np.allclose(one.centroid_rect, expect)
+    assert one.disparity == torso.disparity  # the larger part's
+    assert len(join_parts([torso, _blob((105, 202, 155, 300), 30.0)], moments)) == 2  # another depth
+    assert len(join_parts([torso, _blob((105, 230, 155, 300), 20.0)], moments)) == 2  # 30 px apart

@@ -79,8 +79,9 @@ class _Acc:
     near: list[float] = field(default_factory=list)  # a body's nearest point's depth before its centre (m)
     az: list[float] = field(default_factory=list)
     el: list[float] = field(default_factory=list)
-    # solid bodies wider than WIDE_PX: angle errors against the volume centroid and the seen surface's mean
-    wide: list[tuple[float, float, float, float]] = field(default_factory=list)
+    # solid bodies wider than WIDE_PX: angle errors (az, el) against the volume centroid, the seen surface's
+    # mean and the silhouette's point (see _wide_errors)
+    wide: list[tuple[float, ...]] = field(default_factory=list)
     z_r: list[float] = field(default_factory=list)  # error / reported 1-σ, per detected frame
     z_az: list[float] = field(default_factory=list)
     z_el: list[float] = field(default_factory=list)
@@ -170,12 +171,32 @@ def score_frame(acc: _Acc, res: FrameResult, truth: FrameTruth, pipe: Pipeline, 
     acc.az.append(_deg(loc.theta - th_t))
     acc.el.append(float(np.degrees(loc.phi - ph_t)))
     if tt.surface_world is not None and _width_px(truth.ids_left, tt.target_id) > WIDE_PX:
-        _, th_s, ph_s = spherical(tt.surface_world - pipe.localizer.origin)
-        acc.wide.append((acc.az[-1], acc.el[-1], _deg(loc.theta - th_s), float(np.degrees(loc.phi - ph_s))))
+        acc.wide.append(_wide_errors(acc.az[-1], acc.el[-1], loc.theta, loc.phi, tt, pipe.localizer.origin))
     tiny = 1e-12  # a zero σ makes any error infinitely many σ
     acc.z_r.append((loc.r - r_t) / max(loc.sigma_r, tiny))
     acc.z_az.append(float(np.radians(acc.az[-1])) / max(loc.sigma_theta, tiny))
     acc.z_el.append(float(np.radians(acc.el[-1])) / max(loc.sigma_phi, tiny))
+
+
+def _wide_errors(az: float, el: float, theta: float, phi: float, tt: TargetTruth, origin: F64
+                 ) -> tuple[float, ...]:
+    """A solid body's angle errors (deg) against three truth points: (az, el) against its volume centroid
+    (given), then against the mean of the surface the left camera sees, (1/N) Σ (c + ρ_p s_p), and against
+    the silhouette's point c + s̄ m̄ / |m̄| (ρ_p: unit ray of pixel p of the body's left silhouette, s_p: the
+    distance to the surface along it; m̄: the silhouette's centroid (x̄_n, ȳ_n, 1) in the undistorted
+    normalised plane, each pixel weighted by its area there; s̄: the same mean of s_p; tracker.sim.render.
+    SimRenderer.surface_mean). The tracker measures the last: eq. (10) takes the area-weighted centroid of
+    the outline's pixels in rectified coordinates, whose ray is m̄'s for the true silhouette; the surface
+    mean lies off that ray where the depth along the silhouette varies, the volume centroid where the body's
+    hidden back is not its front's mirror. nan where the truth has no such point."""
+    out = [az, el]
+    for p in (tt.surface_world, tt.silhouette_world):
+        if p is None:
+            out += [float("nan"), float("nan")]
+            continue
+        _, th, ph = spherical(p - origin)
+        out += [_deg(theta - th), float(np.degrees(phi - ph))]
+    return tuple(out)
 
 
 def run_scenario(name: str | Scenario, frames: int | None = None, seed: int = 0, rig: StereoRig | None = None,
@@ -247,10 +268,11 @@ def _report(name: str, seed: int, n: int, acc: _Acc, gain: Callable[[float], flo
     if any(v > 0 for v in acc.near):  # solid bodies: the range acceptance allows their own depth
         extra["range_depth_allowance_m"] = float(np.mean(acc.near))
         extra["range_rmse_allowed_m"] = float(1.5 * np.mean(acc.limit) + np.mean(acc.near))
-    if acc.wide:  # solid bodies wider than WIDE_PX: angles against the centroid and the seen surface's mean
+    if acc.wide:  # solid bodies wider than WIDE_PX: angles against the centroid, surface mean, silhouette
         w = np.asarray(acc.wide)
         extra["wide_frames"] = float(len(w))
-        for k, key in enumerate(("azimuth", "elevation", "azimuth_surface", "elevation_surface")):
+        for k, key in enumerate(("azimuth", "elevation", "azimuth_surface", "elevation_surface",
+                                 "azimuth_silhouette", "elevation_silhouette")):
             extra[f"{key}_rmse_wide_deg"] = _rms(list(w[:, k]))
     (r_in, r_nees), (a_in, a_nees), (e_in, e_nees) = (sigma_consistency(z) for z in (acc.z_r, acc.z_az, acc.z_el))
     return EvalReport(

@@ -24,7 +24,7 @@ from tracker.localize import Localization, Localizer
 from tracker.outline import OutlineConfig, warped_outline_sigma_px
 from tracker.rectify import Rectifier
 from tracker.schedule import SigmaSchedule, SigmaTerms, VerifySchedule
-from tracker.split import join_occluded
+from tracker.split import join_occluded, join_parts
 from tracker.temporal import TemporalConfig, TemporalDetector, without_duplicates
 from tracker.tracks import MultiTracker, TrackerConfig
 from tracker.verify import Blob, Verifier
@@ -132,7 +132,7 @@ class Pipeline:
         hints = self.tracker.predictions(frame.t)
         boxes = cands.worth_verifying(self.subtractor.cfg.moving_min_cells, hints)
         blobs, deferred = self.schedule.run(boxes, hints, lambda box: self.verifier.verify_all(frame, box, hints), t0)
-        blobs = without_duplicates(blobs)  # one object verified again from an overlapping box
+        blobs = join_parts(without_duplicates(blobs), self.rect.area_moments)  # one object again, or a part
         blobs = self.temporal.detect(frame, blobs, hints)  # cameras still: objects too near their background
         blobs = join_occluded(blobs, lambda box: self._background_disparity(frame, box),  # one body, two sides
                               self.subtractor.cfg.min_depth_gap, self.rect.area_moments)

@@ -170,3 +170,37 @@ def join_occluded(blobs: list[Blob], bg_disparity: Callable[[Box], tuple[F32, Bo
 
 def _left_right(a: Blob, b: Blob) -> tuple[Blob, Blob]:
     return (a, b) if a.centroid_raw[0] <= b.centroid_raw[0] else (b, a)
+
+
+def join_parts(blobs: list[Blob], area_moments: NDArray[np.float64]) -> list[Blob]:
+    """The blobs with the parts of one body verified from different candidate boxes joined (a walker close
+    to a wall, whose candidate stage splits it at the waist or the neck): each pair same_body links, over
+    the union of their boxes, joined in the first's place with the larger's disparity (join); the others
+    keep their order. The rule tracker.verify applies to the regions of one box, applied across boxes."""
+    out = list(blobs)
+    k = 0
+    while k + 1 < len(out):
+        j = next((j for j in range(k + 1, len(out)) if _parts_of_one(out[k], out[j])), None)
+        if j is None:
+            k += 1
+            continue
+        out[k] = join(out[k], out.pop(j), area_moments)
+    return out
+
+
+def _parts_of_one(a: Blob, b: Blob) -> bool:
+    """same_body for blobs of different boxes: both masks painted into the union of the boxes, the larger
+    blob as the body (its rows set the gap); boxes farther apart than any part gap are not compared."""
+    if a.area < b.area:
+        a, b = b, a
+    gap = max(PART_GAP_MIN_PX, int(round(PART_GAP_REL * a.mask.shape[0]))) + 1
+    if (b.box[0] > a.box[2] + gap or a.box[0] > b.box[2] + gap or b.box[1] > a.box[3] + gap
+            or a.box[1] > b.box[3] + gap):
+        return False
+    box = (min(a.box[0], b.box[0]), min(a.box[1], b.box[1]), max(a.box[2], b.box[2]), max(a.box[3], b.box[3]))
+    masks = []
+    for blob in (a, b):
+        m = np.zeros((box[3] - box[1], box[2] - box[0]), bool)
+        m[blob.box[1] - box[1]:blob.box[3] - box[1], blob.box[0] - box[0]:blob.box[2] - box[0]] = blob.mask
+        masks.append(m)
+    return same_body(masks[0], a.disparity, masks[1], b.disparity)

@@ -58,6 +58,9 @@ class TargetTruth:
     # a solid body: the mean world point (m, (3,)) of the surface the left camera sees of it (Renderer.
     # surface_mean): the point a camera can measure; None for plates (their centre is that point) or unseen
     surface_world: F64 | None = None
+    # a solid body: the point the tracker measures, on the mean ray of its silhouette in the left image at
+    # the seen surface's mean distance (Renderer.surface_mean with on_mean_ray); None as surface_world
+    silhouette_world: F64 | None = None
 
 
 @dataclass(frozen=True)
@@ -85,6 +88,7 @@ class _View:
     yn_range: tuple[float, float]
     xy: F32  # undistorted normalised coordinates of every pixel, (H, W, 2)
     ray_len: F32  # |(xn, yn, 1)|, (H, W)
+    area: F32  # each pixel's area in the undistorted normalised plane, |∂(xn, yn) / ∂(u, v)|, (H, W)
 
 
 def _make_view(cam: Camera) -> _View:
@@ -94,8 +98,10 @@ def _make_view(cam: Camera) -> _View:
     rays = cam.rays_rig(u, v).astype(np.float32)
     xy = np.dstack([xn, yn]).astype(np.float32)
     ray_len = np.sqrt(1.0 + xn * xn + yn * yn).astype(np.float32)
+    (xv, xu), (yv, yu) = np.gradient(xn), np.gradient(yn)  # d/dv (rows), d/du (columns)
+    area = np.abs(xu * yv - xv * yu).astype(np.float32)
     return _View(cam, rays, (float(xn.min()) - 0.02, float(xn.max()) + 0.02),
-                 (float(yn.min()) - 0.02, float(yn.max()) + 0.02), xy, ray_len)
+                 (float(yn.min()) - 0.02, float(yn.max()) + 0.02), xy, ray_len, area)
 
 
 def _cast_plane_fast(view: _View, R_wr: F64, s: Surface, img: F32 | U8, depth: F32, t: float = 0.0,
@@ -372,12 +378,15 @@ class SimRenderer:
         x0, y0, x1, y1 = win
         return win, self._depth[k][y0:y1, x0:x1].copy()
 
-    def surface_mean(self, k: int, ids: U8, target_id: int,
-                     window: tuple[tuple[int, int, int, int], F32] | None) -> F64 | None:
+    def surface_mean(self, k: int, ids: U8, target_id: int, window: tuple[tuple[int, int, int, int], F32] | None,
+                     on_mean_ray: bool = False) -> F64 | None:
         """The mean point (rig frame, m, (3,)) of the surface an object shows camera k in a render (window:
         that render's depth_window(k)): over its pixels (ids == target_id), (1/N) Σ (c + ρ_p s_p), c the
         camera centre, ρ_p the pixel's unit ray and s_p the distance along it to the surface drawn there.
-        None when the object shows no pixel."""
+        With on_mean_ray, the silhouette's point instead: c + s̄ m̄ / |m̄|, m̄ = Σ a_p ℓ_p ρ_p / Σ a_p and
+        s̄ = Σ a_p s_p / Σ a_p, a_p the pixel's area in the undistorted normalised plane and ℓ_p ρ_p its
+        (x_n, y_n, 1): the ray of the silhouette's area-weighted centroid in that plane (what eq. 10 measures
+        in rectified coordinates) at the surface's mean distance. None when the object shows no pixel."""
         if window is None:
             return None
         (x0, y0, x1, y1), depth = window
@@ -387,6 +396,10 @@ class SimRenderer:
         view = self.views[k]
         s = depth[m].astype(np.float64)
         rays = view.rays[y0:y1, x0:x1][m].astype(np.float64)
+        if on_mean_ray:
+            a = view.area[y0:y1, x0:x1][m].astype(np.float64)
+            ray = (a * view.ray_len[y0:y1, x0:x1][m]) @ rays  # Σ a_p ℓ_p ρ_p, a multiple of m̄
+            return np.asarray(view.cam.c + float(a @ s / a.sum()) * ray / np.linalg.norm(ray))
         return np.asarray(view.cam.c + (rays * s[:, None]).mean(axis=0))
 
     def _cast_moving(self, k: int, R_wr: F64, moving: Sequence[Surface | Solid], t: float, img8: U8,

@@ -345,7 +345,7 @@ class SimRig:
         """Truth of one object at scene time t (s): its centre, projections, and its pixels' centroids and
         areas in each image (ids: the (left, right) id images, moving objects drawn only inside `windows`);
         visible fraction against area·(f/z)²; for a body, the mean point of the surface it shows the left
-        camera (depth: that render's depth_window(0))."""
+        camera and its silhouette's point (depth: that render's depth_window(0); Renderer.surface_mean)."""
         tid, world = obj.target_id, obj.trajectory(t)
         rig_p = R_wr.T @ world
         pl = self.rig.left.project(rig_p[None, :])[0]
@@ -363,10 +363,12 @@ class SimRig:
             cents.append(np.array([m["m10"] / m["m00"] + x0, m["m01"] / m["m00"] + y0])
                          if m["m00"] > 0 else None)
         expected = obj.area_m2 * (self.rig.left.f / max(rig_p[2], 0.1)) ** 2
-        near, surface = 0.0, None
+        near, surface, silhouette = 0.0, None, None
         if isinstance(obj, BodyObject):
             near = obj.near_depth_m(t, R_wr @ self.rig.left.c)
             seen = self.renderer.surface_mean(0, ids[0], tid, depth)
             surface = None if seen is None else R_wr @ seen
+            ray = self.renderer.surface_mean(0, ids[0], tid, depth, on_mean_ray=True)
+            silhouette = None if ray is None else R_wr @ ray
         return TargetTruth(tid, world, rig_p, pl, pr, cents[0], cents[1], areas[0],
-                           min(areas[0] / expected, 1.0), areas[1], near, surface)
+                           min(areas[0] / expected, 1.0), areas[1], near, surface, silhouette)
