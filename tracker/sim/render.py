@@ -210,7 +210,7 @@ class _Bands:
     takes and does bands until none is left; wait() returns once every band is done, raising what a band
     raised."""
 
-    BAND = 48
+    BAND = 96  # 5 bands at 480 rows: 0.05-0.13 ms a frame less than 48 (fewer hand-overs; pan, interleaved runs)
 
     def __init__(self, h: int, fn: Callable[[int, int], None]):
         self._starts = list(range(0, h, self.BAND))
