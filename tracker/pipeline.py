@@ -202,7 +202,8 @@ class Pipeline:
                      ) -> tuple[float, float]:
         """The centroid's extra 1-σ (px, x and y) where the blob is cut by the image border, by another
         object found this frame (others: box, mask, disparity) or, while the cameras are still (its
-        correspondence map is kept), by a nearer background (tracker.visibility)."""
+        correspondence map is kept), by a nearer background; and, in quadrature, the offset of the rows down
+        to the ground where the blob's lowest part may be lost against it (tracker.visibility)."""
         mask, box = padded(b.mask, b.box, self.rig.left.size, left=2 + int(np.ceil(max(b.disparity, 0.0))),
                            below=2 + b.box[3] - b.box[1])
         cm = None if self.subtractor.moving else self.subtractor.correspondence(0, frame.gimbal, box)
