@@ -28,7 +28,15 @@ from tracker.split import join_occluded, join_parts
 from tracker.temporal import TemporalConfig, TemporalDetector, without_duplicates
 from tracker.tracks import MultiTracker, TrackerConfig
 from tracker.verify import Blob, Verifier
-from tracker.visibility import VisibilityConfig, cut_sides, extra_sigma_px, object_and_shadow, padded, with_objects
+from tracker.visibility import (
+    VisibilityConfig,
+    cut_sides,
+    extra_sigma_px,
+    object_and_shadow,
+    padded,
+    unseen_below,
+    with_objects,
+)
 
 F64 = NDArray[np.float64]
 BoolA = NDArray[np.bool_]
@@ -194,12 +202,18 @@ class Pipeline:
                      ) -> tuple[float, float]:
         """The centroid's extra 1-σ (px, x and y) where the blob is cut by the image border, by another
         object found this frame (others: box, mask, disparity) or, while the cameras are still (its
-        correspondence map is kept), by a nearer background (tracker.visibility)."""
-        mask, box = padded(b.mask, b.box, self.rig.left.size, left=2 + int(np.ceil(max(b.disparity, 0.0))))
+        correspondence map is kept), by a nearer background; and, in quadrature, the offset of the rows down
+        to the ground where the blob's lowest part may be lost against it (tracker.visibility)."""
+        mask, box = padded(b.mask, b.box, self.rig.left.size, left=2 + int(np.ceil(max(b.disparity, 0.0))),
+                           below=2 + b.box[3] - b.box[1])
         cm = None if self.subtractor.moving else self.subtractor.correspondence(0, frame.gimbal, box)
         disp, valid = with_objects(None if cm is None else cm.disparity, None if cm is None else cm.valid, box, others)
-        cut = cut_sides(mask, box, self.rig.left.size, b.disparity, disp, valid, self.visibility)
-        return extra_sigma_px(b.mask, cut, self.visibility) if any(cut) else (0.0, 0.0)
+        n = min(b.box[3] + 2, self.rig.left.size[1]) - box[1]  # cut_sides: the 2-px ring below, not the ground
+        cut = cut_sides(mask[:n], (box[0], box[1], box[2], box[1] + n), self.rig.left.size, b.disparity,
+                        None if disp is None else disp[:n], None if valid is None else valid[:n], self.visibility)
+        px, py = extra_sigma_px(b.mask, cut, self.visibility) if any(cut) else (0.0, 0.0)
+        ux, uy = unseen_below(mask, b.disparity, disp, valid, self.visibility)
+        return float(np.hypot(px, ux)), float(np.hypot(py, uy))
 
     def _foreground_low(self, blobs: list[Blob]) -> NDArray[np.uint8] | None:
         if not blobs:
