@@ -148,7 +148,6 @@ class StereoSubtractor:
         self.moving = False
         self._frame_pose: tuple[float, float] | None = None  # pose of the last frame stepped
         self._pending: tuple[U8, bool] | None = None
-        self._candidates: U8 | None = None  # the last frame's candidate cells (0/255), low resolution
         # temporal model per pose: background B and mean absolute deviation D, at gain 1
         self.left_bg: dict[tuple[float, float], tuple[NDArray[np.float32], NDArray[np.float32]]] = {}
         self._stripe = 0
@@ -238,33 +237,11 @@ class StereoSubtractor:
         self.left_learnt[self._pose(frame.gimbal)][y0:y1] += 1
         cur = frame.left[y0:y1].astype(np.float32) * np.float32(1.0 / max(gain, 1e-3))
         keep = paint_masks(objects, y0, (y1 - y0, bg.shape[1])) if objects else None
-        held = self._held_rows(y0, y1, bg.shape[1])
-        if held is not None:
-            keep = held if keep is None else keep | held
         a = np.float32(alpha)
         new_dev = dev[y0:y1] + a * (np.abs(cur - bg[y0:y1]) - dev[y0:y1])  # D ← D + α(|Γ/g - B| - D)
         new_bg = bg[y0:y1] + a * (cur - bg[y0:y1])  # B ← B + α(Γ/g - B)
         dev[y0:y1] = new_dev if keep is None else np.where(keep, dev[y0:y1], new_dev)
         bg[y0:y1] = new_bg if keep is None else np.where(keep, bg[y0:y1], new_bg)
-
-    def _held_rows(self, y0: int, y1: int, width: int) -> NDArray[np.bool_] | None:
-        """Full-resolution rows y0..y1 (bool, (y1 - y0, width)) about the last frame's stereo candidate
-        cells, grown by a cell: B and D are not learnt there (None: no candidates). A candidate no stage
-        verified may still be an object: a target edging in at the image border (endless, frames 1540-1552:
-        5-8 px of a plate seen by the left camera only) that B and D learnt in one stripe's update was cut
-        from the temporal outline for the next 30 frames (its right quarter lost, azimuth 0.9 deg off).
-        A background change the stereo residual shows is learnt away by its floor within absorb_s."""
-        cand = self._candidates
-        if cand is None:
-            return None
-        s = self.cfg.stride
-        rows = cand[max(y0 // s - 1, 0):(y1 + s - 1) // s + 1]
-        if cv2.countNonZero(rows) == 0:
-            return None
-        grown = cv2.dilate(cand[max(y0 // s - 1, 0):(y1 + s - 1) // s + 1], np.ones((3, 3), np.uint8))
-        up = np.repeat(np.repeat(grown > 0, s, axis=0), s, axis=1)
-        off = y0 - max(y0 // s - 1, 0) * s
-        return np.ascontiguousarray(up[off:off + y1 - y0, :width])
 
     def floor_at(self, box: Box) -> U8:
         """The temporal floor B upsampled (nearest) to the full-resolution pixels of `box`."""
@@ -298,7 +275,6 @@ class StereoSubtractor:
         boxes, cells = self._boxes(fg)
         cv2.min(self.floor, resid, dst=self.floor)  # the floor falls at once
         self._pending = (resid, moving)
-        self._candidates = fg
         return Candidates(boxes, cells, resid, moving)
 
     def _boxes(self, fg: U8) -> tuple[tuple[Box, ...], tuple[int, ...]]:
