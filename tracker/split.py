@@ -140,11 +140,8 @@ def join(a: Blob, b: Blob, area_moments: NDArray[np.float64], lead: Blob | None 
     rectified with each pixel's area from area_moments (H, W, 3) [a x, a y, a]), the disparity, match and
     gain of `lead` (by default the larger blob)."""
     big = lead if lead is not None else (a if a.area >= b.area else b)
-    box = (min(a.box[0], b.box[0]), min(a.box[1], b.box[1]), max(a.box[2], b.box[2]), max(a.box[3], b.box[3]))
-    mask = np.zeros((box[3] - box[1], box[2] - box[0]), bool)
-    for blob in (a, b):
-        x0, y0, x1, y1 = blob.box
-        mask[y0 - box[1]:y1 - box[1], x0 - box[0]:x1 - box[0]] |= blob.mask
+    box = _union(a.box, b.box)
+    mask = _painted(a, box) | _painted(b, box)
     m8 = mask.view(np.uint8)
     area, c = mask_centroid(m8)
     sx, sy, sa, _ = cv2.mean(area_moments[box[1]:box[3], box[0]:box[2]], mask=m8)
@@ -152,20 +149,38 @@ def join(a: Blob, b: Blob, area_moments: NDArray[np.float64], lead: Blob | None 
                    centroid_rect=np.array([sx / sa, sy / sa]))
 
 
-def join_occluded(blobs: list[Blob], bg_disparity: Callable[[Box], tuple[F32, BoolA]], min_gap: float,
-                  area_moments: NDArray[np.float64]) -> list[Blob]:
-    """The blobs with each pair split by a nearer occluder (occluded_gap) joined in the first's place; the
-    others keep their order."""
+def _union(a: Box, b: Box) -> Box:
+    return min(a[0], b[0]), min(a[1], b[1]), max(a[2], b[2]), max(a[3], b[3])
+
+
+def _painted(blob: Blob, box: Box) -> BoolA:
+    """The blob's mask painted into `box`, which holds the blob's own box."""
+    out = np.zeros((box[3] - box[1], box[2] - box[0]), bool)
+    x0, y0, x1, y1 = blob.box
+    out[y0 - box[1]:y1 - box[1], x0 - box[0]:x1 - box[0]] = blob.mask
+    return out
+
+
+def _join_linked(blobs: list[Blob], linked: Callable[[Blob, Blob], bool], area_moments: NDArray[np.float64]
+                 ) -> list[Blob]:
+    """The blobs with each pair `linked` says are one object joined in the first's place (join, the larger's
+    disparity); the others keep their order."""
     out = list(blobs)
     k = 0
     while k + 1 < len(out):
-        j = next((j for j in range(k + 1, len(out)) if occluded_gap(*_left_right(out[k], out[j]), bg_disparity,
-                                                                   min_gap)), None)
+        j = next((j for j in range(k + 1, len(out)) if linked(out[k], out[j])), None)
         if j is None:
             k += 1
             continue
         out[k] = join(out[k], out.pop(j), area_moments)
     return out
+
+
+def join_occluded(blobs: list[Blob], bg_disparity: Callable[[Box], tuple[F32, BoolA]], min_gap: float,
+                  area_moments: NDArray[np.float64]) -> list[Blob]:
+    """The blobs with each pair split by a nearer occluder (occluded_gap) joined in the first's place; the
+    others keep their order."""
+    return _join_linked(blobs, lambda a, b: occluded_gap(*_left_right(a, b), bg_disparity, min_gap), area_moments)
 
 
 def _left_right(a: Blob, b: Blob) -> tuple[Blob, Blob]:
@@ -177,15 +192,7 @@ def join_parts(blobs: list[Blob], area_moments: NDArray[np.float64]) -> list[Blo
     to a wall, whose candidate stage splits it at the waist or the neck): each pair same_body links, over
     the union of their boxes, joined in the first's place with the larger's disparity (join); the others
     keep their order. The rule tracker.verify applies to the regions of one box, applied across boxes."""
-    out = list(blobs)
-    k = 0
-    while k + 1 < len(out):
-        j = next((j for j in range(k + 1, len(out)) if _parts_of_one(out[k], out[j])), None)
-        if j is None:
-            k += 1
-            continue
-        out[k] = join(out[k], out.pop(j), area_moments)
-    return out
+    return _join_linked(blobs, _parts_of_one, area_moments)
 
 
 def _parts_of_one(a: Blob, b: Blob) -> bool:
@@ -197,10 +204,5 @@ def _parts_of_one(a: Blob, b: Blob) -> bool:
     if (b.box[0] > a.box[2] + gap or a.box[0] > b.box[2] + gap or b.box[1] > a.box[3] + gap
             or a.box[1] > b.box[3] + gap):
         return False
-    box = (min(a.box[0], b.box[0]), min(a.box[1], b.box[1]), max(a.box[2], b.box[2]), max(a.box[3], b.box[3]))
-    masks = []
-    for blob in (a, b):
-        m = np.zeros((box[3] - box[1], box[2] - box[0]), bool)
-        m[blob.box[1] - box[1]:blob.box[3] - box[1], blob.box[0] - box[0]:blob.box[2] - box[0]] = blob.mask
-        masks.append(m)
-    return same_body(masks[0], a.disparity, masks[1], b.disparity)
+    box = _union(a.box, b.box)
+    return same_body(_painted(a, box), a.disparity, _painted(b, box), b.disparity)
