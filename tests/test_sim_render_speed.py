@@ -117,3 +117,22 @@ def test_row_bands_are_each_done_once_by_either_thread_and_errors_reach_wait() -
     bad.run()
     with pytest.raises(ValueError, match="band failed"):
         bad.wait()
+
+
+def test_segments_hidden_from_every_camera_centre_are_dropped_and_no_others() -> None:
+    from tracker.sim import static_cast
+
+    ex, ey = np.eye(3)[0], np.eye(3)[1]
+    tex = np.full((4, 4), 100, np.uint8)
+    hedge = Surface("hedge", np.array([0.0, 0.9, 24.0]), ex, ey, 40.0, 0.6, tex, 1.0)
+    foot = (np.array([-60.0, 1.5, 60.0]), np.array([60.0, 1.5, 60.0]))  # a wall's foot behind it
+    assert static_cast._hidden(*foot, hedge, 0.15)
+    assert not static_cast._hidden(*foot, hedge, 1.0)  # a camera 1 m up sees over the hedge
+    narrow = Surface("narrow", hedge.P0, ex, ey, 20.0, 0.6, tex, 1.0)
+    assert not static_cast._hidden(*foot, narrow, 0.15)  # its ends are seen beside it
+    assert not static_cast._hidden(foot[0], foot[1] - [0.0, 0.0, 50.0], hedge, 0.15)  # one end in front of it
+    # the pan scene: the wall's foot is dropped, the hedge's top and the facade's edges are kept
+    scene = SimRig(get_scenario("pan")).renderer._scene
+    kept = {tuple(np.round(s, 1).ravel()) for s in scene._planes.segments}
+    assert (-60.0, 1.5, 60.0, 60.0, 1.5, 60.0) not in kept and (60.0, 1.5, 60.0, -60.0, 1.5, 60.0) not in kept
+    assert (-40.0, 0.3, 24.0, 40.0, 0.3, 24.0) in kept and (5.5, -6.5, 22.0, 12.5, -6.5, 22.0) in kept

@@ -100,15 +100,41 @@ def _on(p: F64, a: F64, b: F64) -> bool:
     return bool(np.linalg.norm(a + t * d - p) < 1e-6)
 
 
-def _segments(surfaces: list[Surface]) -> F64:
+def _hidden(a: F64, b: F64, s: Surface, reach: float) -> bool:
+    """Whether the segment from a to b (world, metres) is behind the rectangle s from every point within
+    `reach` metres of the origin (every camera centre at every gimbal pose; world = R_wr @ rig): the line
+    from each corner c of the cube [-reach, reach]³ to each end p of the segment meets s strictly inside
+    it, with c more than 0.1 m in front of its plane (so the plan never leaves s to the caller as too near)
+    and p behind it. For fixed p the lines from the cube meet the plane inside the hull of the corners'
+    points, and for fixed c those to the segment inside the hull of the ends', so every line from the cube
+    to the segment meets the plane inside the hull of these 16 points, inside s: nothing behind s there is
+    seen, and the segment cannot separate what two pixels see."""
+    cube = reach * np.array([(x, y, z) for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], np.float64)
+    front = (s.P0 - cube) @ s.normal  # n·(P0 - c), (8,)
+    if not (np.all(front > 0.1) or np.all(front < -0.1)):
+        return False
+    for p in (a, b):
+        behind = float((p - s.P0) @ s.normal)  # n·(p - P0): the same sign as n·(P0 - c) when behind
+        if not np.all(front * behind > 1e-12):
+            return False
+        x = cube + (p - cube) * (front / (front + behind))[:, None]  # on the plane: n·(x - P0) = 0
+        if (np.abs((x - s.P0) @ s.u) >= s.half_w * (1 - 1e-9)).any() or \
+                (np.abs((x - s.P0) @ s.v) >= s.half_h * (1 - 1e-9)).any():
+            return False
+    return True
+
+
+def _segments(surfaces: list[Surface], reach: float) -> F64:
     """Where the nearest surface can change, (K, 2, 3) segments (world, metres): the rectangles' edges and
     the segments where two of them cross, without those that lie on another (a plane standing on the
-    ground meets it along its own bottom edge)."""
+    ground meets it along its own bottom edge) and those hidden behind a rectangle from every camera centre
+    within `reach` metres of the origin (_hidden: a wall's foot behind a hedge)."""
     segs = [(c[i], c[(i + 1) % 4]) for c in (s.corners() for s in surfaces) for i in range(4)]
     segs += [x for i, a in enumerate(surfaces) for b in surfaces[i + 1:] if (x := _crossing(a, b)) is not None]
     keep = [(a, b) for i, (a, b) in enumerate(segs)
             if not any(_on(a, *o) and _on(b, *o) and (j < i or not (_on(o[0], a, b) and _on(o[1], a, b)))
-                       for j, o in enumerate(segs) if j != i)]
+                       for j, o in enumerate(segs) if j != i)
+            and not any(_hidden(a, b, s, reach) for s in surfaces)]
     return np.array(keep, np.float64).reshape(-1, 2, 3)
 
 
@@ -130,12 +156,12 @@ class _Planes:
     axes: F64
 
 
-def _planes(surfaces: list[Surface], origins: F64) -> _Planes:
+def _planes(surfaces: list[Surface], origins: F64, reach: float) -> _Planes:
     sizes = np.array([s.texture.shape[::-1] for s in surfaces], np.float64).reshape(-1, 2)  # (tw, th)
     texel = np.array([s.texel_m for s in surfaces])
     extent = np.array([(s.half_w, s.half_h) for s in surfaces]).reshape(-1, 2)
     normal, u, v, P0 = (np.array([getattr(s, a) for s in surfaces]).reshape(-1, 3) for a in ("normal", "u", "v", "P0"))
-    return _Planes(normal, u, v, P0, texel, origins + sizes / 2.0, extent / texel[:, None], _segments(surfaces),
+    return _Planes(normal, u, v, P0, texel, origins + sizes / 2.0, extent / texel[:, None], _segments(surfaces, reach),
                    np.stack([u, v, normal]))
 
 
@@ -338,7 +364,8 @@ class StaticScene:
         self._fast = [s for s in surfaces if _fits_atlas(s)][:255]  # labels are uint8, 255 for none
         self._fast_ids = {id(s) for s in self._fast}
         self._atlas, origins = _atlas(self._fast) if self._fast else (np.zeros((1, 1), np.uint8), np.zeros((0, 2)))
-        self._planes = _planes(self._fast, origins)
+        reach = max((float(np.linalg.norm(c.c)) for c in cams), default=0.0)  # camera centres' distance from
+        self._planes = _planes(self._fast, origins, reach)  # the gimbal's centre, the world's origin
         self._grids = [_grid(c) for c in cams]
 
     def render(self, k: int, R_wr: F64) -> tuple[U8, F32, list[Surface]]:
