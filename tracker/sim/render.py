@@ -274,11 +274,20 @@ class SimRenderer:
         """(fn(0, plan 0), fn(1, plan 1)), camera 0's on the helper thread: both plans are made on this
         thread (small numpy steps holding the GIL), camera 0's draw overlapping camera 1's plan. Two whole
         renders on two threads instead fight over the GIL at every step. R_wr None: no static render, the
-        plans are None."""
+        plans are None. This thread waits until the helper has started camera 0: woken while this thread
+        plans camera 1, the helper would wait for the GIL until a numpy step let go of it (about 0.3 ms
+        later, pan), and the time lost there is lost at the end of the frame."""
         if self._pool is None:
             self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="sim-render")
         plan0 = self._scene.plan(0, R_wr) if R_wr is not None else None
-        first = self._pool.submit(fn, 0, plan0)
+        started = threading.Event()
+
+        def helper() -> _T:
+            started.set()
+            return fn(0, plan0)
+
+        first = self._pool.submit(helper)
+        started.wait()
         try:
             second = fn(1, self._scene.plan(1, R_wr) if R_wr is not None else None)
         finally:
