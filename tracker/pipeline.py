@@ -24,6 +24,7 @@ from tracker.localize import Localization, Localizer
 from tracker.outline import OutlineConfig, warped_outline_sigma_px
 from tracker.rectify import Rectifier
 from tracker.schedule import SigmaSchedule, SigmaTerms, VerifySchedule
+from tracker.segmentation import edge_quantisation_px, hull_gap_px
 from tracker.split import join_occluded, join_parts
 from tracker.temporal import TemporalConfig, TemporalDetector, without_duplicates
 from tracker.tracks import MultiTracker, TrackerConfig
@@ -90,7 +91,7 @@ class Pipeline:
         self.subtractor = StereoSubtractor(self.bg, detector)
         self.verifier = Verifier(self.subtractor, self.rect)
         self.temporal = TemporalDetector(self.subtractor, self.verifier, temporal)
-        self.localizer = Localizer(self.rect, origin)
+        self.localizer = Localizer(self.rect, origin, centroid_sigma_px=0.0)  # the outline's own: _centroid_extra
         self.tracker = MultiTracker(tracker)
         self.schedule = VerifySchedule(verify_budget_ms)
         self.sigma_schedule = SigmaSchedule(sigma_budget_ms)
@@ -188,13 +189,16 @@ class Pipeline:
         return scatter_sigma(self.verifier.part_disparities(frame, b))
 
     def _centroid_extra(self, frame: StereoFrame, b: Blob, blobs: list[Blob]) -> tuple[float, float]:
-        """The centroid's further 1-σ (px, x and y): where the target is seen in part, and where its outline
-        is drawn by warping (no temporal model at this pose: the cameras move; tracker.outline); in
-        quadrature, the two being independent."""
+        """The centroid's further 1-σ (px, x and y): where the target is seen in part, where its outline
+        is drawn by warping (no temporal model at this pose: the cameras move; tracker.outline), the
+        outline's whole pixels and the parts of a body its segmentation may have missed in the notches of
+        its outline (tracker.segmentation); in quadrature, all being independent."""
         others = [e for o in blobs if o is not b for e in object_and_shadow(o.box, o.mask, o.disparity, o.bg_disparity)]
         px, py = self._partly_seen(frame, b, others)
+        terms = [edge_quantisation_px(b.mask), hull_gap_px(b.mask)]
         if self.subtractor.left_background(frame.gimbal) is None:
-            ox, oy = warped_outline_sigma_px(b.mask, self.outline)
+            terms.append(warped_outline_sigma_px(b.mask, self.outline))
+        for ox, oy in terms:
             px, py = float(np.hypot(px, ox)), float(np.hypot(py, oy))
         return px, py
 
