@@ -46,10 +46,11 @@ KAPPA = 1.0 / np.sqrt(3.0)  # rms of the unknown share of the hull gap that is t
 def _moments(m8: NDArray[np.integer[Any] | np.floating[Any]]) -> tuple[float, float, float, float, float]:
     """n, Σ x, Σ y, Σ x², Σ y² of a 0/1 image's pixels (x, y from its top left), from its column and row
     sums (cv2.reduce: several times quicker than cv2.moments)."""
-    cols = cv2.reduce(m8, 0, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel().astype(np.float64)
-    rows = cv2.reduce(m8, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel().astype(np.float64)
+    cols = cv2.reduce(m8, 0, cv2.REDUCE_SUM, dtype=cv2.CV_64F).ravel()
+    rows = cv2.reduce(m8, 1, cv2.REDUCE_SUM, dtype=cv2.CV_64F).ravel()
     x, y = np.arange(cols.size, dtype=np.float64), np.arange(rows.size, dtype=np.float64)
-    return float(cols.sum()), float(cols @ x), float(rows @ y), float(cols @ (x * x)), float(rows @ (y * y))
+    cx, cy = cols * x, rows * y
+    return float(cols.sum()), float(cx.sum()), float(cy.sum()), float(cx @ x), float(cy @ y)
 
 
 def _spread(m: tuple[float, float, float, float, float], cx: float, cy: float) -> tuple[float, float]:
