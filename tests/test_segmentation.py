@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tracker.segmentation import edge_quantisation_px, hull_gap_px
+from tracker.segmentation import HeightHistory, edge_quantisation_px, hull_gap_px
 
 
 def _centroid(m: np.ndarray) -> np.ndarray:
@@ -68,3 +68,23 @@ def test_hull_gap_covers_a_missed_part_of_unknown_size() -> None:
     deeper = seen.copy()
     deeper[45:105, 18:32] = False
     assert hull_gap_px(deeper)[1] > sy
+
+
+def test_height_history_is_quiet_while_a_target_only_comes_nearer() -> None:
+    hist = HeightHistory()
+    # a target 100 px tall at disparity 20 px coming nearer: its height grows with its disparity, rounded
+    out = [hist.sigma_px(1, i, float(round(5.0 * (20.0 + 0.2 * i))), 20.0 + 0.2 * i) for i in range(30)]
+    assert max(out) == 0.0
+
+
+def test_height_history_takes_half_of_a_piece_lost_or_gained() -> None:
+    hist = HeightHistory()
+    for i in range(10):
+        assert hist.sigma_px(1, i, 100.0, 20.0) == 0.0
+    assert abs(hist.sigma_px(1, 10, 88.0, 20.0) - 0.5 * (12.0 - 1.0)) < 1e-9  # a head of 12 px lost
+    assert abs(hist.sigma_px(1, 11, 110.0, 20.0) - 0.5 * (10.0 - 1.0)) < 1e-9  # something merged on top
+    assert hist.sigma_px(2, 11, 60.0, 20.0) == 0.0  # another track has its own history
+    # after a gap of more than max_gap frames the old heights no longer count, nor for an ended track
+    assert hist.sigma_px(1, 20, 50.0, 20.0) == 0.0
+    hist.keep_only([2])
+    assert hist.sigma_px(1, 21, 10.0, 20.0) == 0.0

@@ -24,7 +24,7 @@ from tracker.localize import Localization, Localizer
 from tracker.outline import OutlineConfig, warped_outline_sigma_px
 from tracker.rectify import Rectifier
 from tracker.schedule import SigmaSchedule, SigmaTerms, VerifySchedule
-from tracker.segmentation import edge_quantisation_px, hull_gap_px
+from tracker.segmentation import HeightHistory, edge_quantisation_px, hull_gap_px
 from tracker.split import join_occluded, join_parts
 from tracker.temporal import TemporalConfig, TemporalDetector, without_duplicates
 from tracker.tracks import MultiTracker, TrackerConfig
@@ -95,6 +95,7 @@ class Pipeline:
         self.tracker = MultiTracker(tracker)
         self.schedule = VerifySchedule(verify_budget_ms)
         self.sigma_schedule = SigmaSchedule(sigma_budget_ms)
+        self.heights = HeightHistory()
         self.visibility = VisibilityConfig()
         self.outline = OutlineConfig()
         self._last_gain = 1.0
@@ -149,6 +150,7 @@ class Pipeline:
         obs = np.array([[b.centroid_raw[0], b.centroid_raw[1], b.disparity] for b in blobs]).reshape(-1, 3)
         ids = self.tracker.update(frame.t, obs)  # from centroids and disparities alone (not their σ)
         self.sigma_schedule.keep_only([tr.track_id for tr in self.tracker.tracks])
+        self.heights.keep_only([tr.track_id for tr in self.tracker.tracks])
         t_ids = time.perf_counter()
         locs = [self._locate(frame, b, blobs, i, t0) for b, i in zip(blobs, ids, strict=True)]
         t3 = time.perf_counter()
@@ -176,11 +178,16 @@ class Pipeline:
         return cm.disparity, cm.valid
 
     def _locate(self, frame: StereoFrame, b: Blob, blobs: list[Blob], track_id: int, start: float) -> Localization:
-        """eq. (1-2) for a blob, with its 1-σ: the matcher's, and the costlier terms (SigmaTerms)."""
+        """eq. (1-2) for a blob, with its 1-σ: the matcher's, the costlier terms (SigmaTerms) and, every
+        frame, a piece lost or gained at the outline's top or bottom (tracker.segmentation.HeightHistory)."""
         terms = self.sigma_schedule.terms(track_id, frame.index, start, lambda: SigmaTerms(
             self._disparity_sigma(frame, b), self._centroid_extra(frame, b, blobs)))
+        rows = np.flatnonzero(b.mask.any(axis=1))
+        jump = self.heights.sigma_px(track_id, frame.index, float(rows[-1] - rows[0] + 1) if rows.size else 0.0,
+                                     b.disparity)
+        cx, cy = terms.centroid_px
         return self.localizer.locate(b.centroid_rect, b.disparity, max(b.disparity_sigma, terms.disparity_px),
-                                     b.area, frame.gimbal, terms.centroid_px)
+                                     b.area, frame.gimbal, (cx, float(np.hypot(cy, jump))))
 
     def _disparity_sigma(self, frame: StereoFrame, b: Blob) -> float:
         """The scatter of the disparities of the blob's parts (px; tracker.disparity_sigma: correlated

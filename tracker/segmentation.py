@@ -92,3 +92,46 @@ def hull_gap_px(mask: BoolA, kappa: float = KAPPA) -> tuple[float, float]:
     sx, sy = _spread(g, a[1] / a[0], a[2] / a[0])
     s = kappa * g[0] / (a[0] + g[0])
     return float(s * np.sqrt(sx / g[0])), float(s * np.sqrt(sy / g[0]))
+
+
+class HeightHistory:
+    """The outline's height per track over its last `frames` frames, to tell a piece of the target lost or
+    gained at its top or bottom (a head past the neck's gap, feet against the ground, another object
+    merged) from the target's own change of size.
+
+    A target's image height scales with its disparity (h / d is its height in metres over f b) and, for a
+    walker, hardly changes with its gait (its legs and arms swing across the line of sight: they change
+    the outline's width by a fifth within a stride, symmetrically about its centre, but not its height).
+    So where the height differs from the median of the last frames' h / d times this frame's d by more
+    than the pixel the outline's ends may round to, the difference is a piece lost or gained at one end:
+    it moves the centroid by about half of it, the 1-σ added along y. Cheap (a median of at most
+    `frames` numbers): worked out every frame, not through the SigmaSchedule."""
+
+    def __init__(self, frames: int = 15, min_frames: int = 3, max_gap: int = 3, round_px: float = 1.0):
+        self.frames = frames
+        self.min_frames = min_frames
+        self.max_gap = max_gap
+        self.round_px = round_px
+        self._kept: dict[int, tuple[int, list[float]]] = {}  # track id -> (last frame index, h / d values)
+
+    def sigma_px(self, track_id: int, index: int, height_px: float, disparity: float) -> float:
+        """The centroid's further 1-σ along y (px) for the track's outline of height_px at frame `index`
+        with disparity `disparity` (px), and the height kept for the next frames. 0 until the track has
+        min_frames heights from frames at most max_gap apart."""
+        if disparity <= 0:
+            return 0.0
+        last, seen = self._kept.get(track_id, (index, []))
+        if index - last > self.max_gap or index < last:
+            seen = []
+        out = 0.0
+        if len(seen) >= self.min_frames:
+            expected = float(np.median(seen)) * disparity
+            out = 0.5 * max(abs(height_px - expected) - self.round_px, 0.0)
+        seen = (seen + [height_px / disparity])[-self.frames:]
+        self._kept[track_id] = (index, seen)
+        return out
+
+    def keep_only(self, track_ids: list[int]) -> None:
+        """Forget the heights of tracks not in track_ids (ended)."""
+        live = set(track_ids)
+        self._kept = {i: v for i, v in self._kept.items() if i in live}
