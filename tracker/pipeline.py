@@ -11,6 +11,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 
+import cv2
 import numpy as np
 from numpy.typing import NDArray
 
@@ -24,7 +25,7 @@ from tracker.localize import Localization, Localizer
 from tracker.outline import OutlineConfig, warped_outline_sigma_px
 from tracker.rectify import Rectifier
 from tracker.schedule import SigmaSchedule, SigmaTerms, VerifySchedule
-from tracker.segmentation import HeightHistory, edge_quantisation_px, hull_gap_px
+from tracker.segmentation import HeightHistory, outline_sigma_px
 from tracker.split import join_occluded, join_parts
 from tracker.temporal import TemporalConfig, TemporalDetector, without_duplicates
 from tracker.tracks import MultiTracker, TrackerConfig
@@ -182,8 +183,7 @@ class Pipeline:
         frame, a piece lost or gained at the outline's top or bottom (tracker.segmentation.HeightHistory)."""
         terms = self.sigma_schedule.terms(track_id, frame.index, start, lambda: SigmaTerms(
             self._disparity_sigma(frame, b), self._centroid_extra(frame, b, blobs)))
-        rows = np.flatnonzero(b.mask.any(axis=1))
-        jump = self.heights.sigma_px(track_id, frame.index, float(rows[-1] - rows[0] + 1) if rows.size else 0.0,
+        jump = self.heights.sigma_px(track_id, frame.index, float(cv2.boundingRect(b.mask.view(np.uint8))[3]),
                                      b.disparity)
         cx, cy = terms.centroid_px
         return self.localizer.locate(b.centroid_rect, b.disparity, max(b.disparity_sigma, terms.disparity_px),
@@ -202,7 +202,7 @@ class Pipeline:
         its outline (tracker.segmentation); in quadrature, all being independent."""
         others = [e for o in blobs if o is not b for e in object_and_shadow(o.box, o.mask, o.disparity, o.bg_disparity)]
         px, py = self._partly_seen(frame, b, others)
-        terms = [edge_quantisation_px(b.mask), hull_gap_px(b.mask)]
+        terms = list(outline_sigma_px(b.mask))
         if self.subtractor.left_background(frame.gimbal) is None:
             terms.append(warped_outline_sigma_px(b.mask, self.outline))
         for ox, oy in terms:

@@ -31,7 +31,7 @@ large one. The pixels a body loses beyond the hull (a head past the neck's gap) 
 
 from __future__ import annotations
 
-from typing import Any
+import statistics
 
 import cv2
 import numpy as np
@@ -43,33 +43,11 @@ EDGE_PX = 1.0 / np.sqrt(12.0)  # rms error of one edge pixel's coverage (px²: o
 KAPPA = 1.0 / np.sqrt(3.0)  # rms of the unknown share of the hull gap that is the target
 
 
-def _moments(m8: NDArray[np.integer[Any] | np.floating[Any]]) -> tuple[float, float, float, float, float]:
-    """n, Σ x, Σ y, Σ x², Σ y² of a 0/1 image's pixels (x, y from its top left), from its column and row
-    sums (cv2.reduce: several times quicker than cv2.moments)."""
-    cols = cv2.reduce(m8, 0, cv2.REDUCE_SUM, dtype=cv2.CV_64F).ravel()
-    rows = cv2.reduce(m8, 1, cv2.REDUCE_SUM, dtype=cv2.CV_64F).ravel()
-    x, y = np.arange(cols.size, dtype=np.float64), np.arange(rows.size, dtype=np.float64)
-    cx, cy = cols * x, rows * y
-    return float(cols.sum()), float(cx.sum()), float(cy.sum()), float(cx @ x), float(cy @ y)
-
-
-def _spread(m: tuple[float, float, float, float, float], cx: float, cy: float) -> tuple[float, float]:
-    """Σ (x - cx)², Σ (y - cy)² of a 0/1 image's pixels, from its `_moments`."""
-    n, sx, sy, sxx, syy = m
-    return max(sxx - 2.0 * cx * sx + cx * cx * n, 0.0), max(syy - 2.0 * cy * sy + cy * cy * n, 0.0)
-
-
 def edge_quantisation_px(mask: BoolA) -> tuple[float, float]:
     """The centroid's 1-σ (px, x and y) from the whole-pixel outline: EDGE_PX times the root sum of the
     squared distances of the mask's edge pixels (a 4-neighbour outside it) from its centroid, over its
     area. mask: (h, w) bool, any origin. (0, 0) for an empty mask."""
-    m8 = mask.view(np.uint8)
-    a = _moments(m8)
-    if a[0] == 0:
-        return 0.0, 0.0
-    edge = cv2.subtract(m8, cv2.erode(m8, _CROSS, borderType=cv2.BORDER_CONSTANT, borderValue=0))
-    sx, sy = _spread(_moments(edge), a[1] / a[0], a[2] / a[0])
-    return float(EDGE_PX * np.sqrt(sx) / a[0]), float(EDGE_PX * np.sqrt(sy) / a[0])
+    return outline_sigma_px(mask)[0]
 
 
 def hull_gap_px(mask: BoolA, kappa: float = KAPPA) -> tuple[float, float]:
@@ -77,21 +55,38 @@ def hull_gap_px(mask: BoolA, kappa: float = KAPPA) -> tuple[float, float]:
     through its outline's pixel centres, that are not in it, the hull's own 1-px rim left out): kappa x
     the gap's share of mask and gap x the gap pixels' rms distance from the mask's centroid along each
     axis. mask: (h, w) bool, any origin. (0, 0) for an empty or convex mask."""
-    m8 = mask.view(np.uint8)
+    return outline_sigma_px(mask, kappa)[1]
+
+
+def outline_sigma_px(mask: BoolA, kappa: float = KAPPA) -> tuple[tuple[float, float], tuple[float, float]]:
+    """`edge_quantisation_px` and `hull_gap_px` of a mask at once: ((x, y), (x, y)) in px. The mask, its
+    edge and its hull gap are summed along the columns and rows in one pass (cv2.reduce over the three as
+    channels), their centroids and spreads taken from those sums. About 0.15 ms for a walker's 100 x 45 px
+    mask in the pipeline."""
+    bx, by, bw, bh = cv2.boundingRect(mask.view(np.uint8))
+    if bw == 0:
+        return (0.0, 0.0), (0.0, 0.0)
+    m8 = np.ascontiguousarray(mask.view(np.uint8)[by:by + bh, bx:bx + bw])  # the work scales with the box
+    edge = cv2.subtract(m8, cv2.erode(m8, _CROSS, borderType=cv2.BORDER_CONSTANT, borderValue=0))
     contours, _ = cv2.findContours(m8, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
-    if not contours:
-        return 0.0, 0.0
-    hull = cv2.convexHull(np.concatenate(contours))
     filled = np.zeros_like(m8)
-    cv2.fillConvexPoly(filled, hull, 1)
+    cv2.fillConvexPoly(filled, cv2.convexHull(np.concatenate(contours)), 1)
     # the hull's own rim left out: a digitised convex outline (a disc) differs from its hull's there
     gap = cv2.subtract(cv2.erode(filled, _CROSS, borderType=cv2.BORDER_CONSTANT, borderValue=0), m8)
-    a, g = _moments(m8), _moments(gap)
-    if g[0] == 0 or a[0] == 0:
-        return 0.0, 0.0
-    sx, sy = _spread(g, a[1] / a[0], a[2] / a[0])
-    s = kappa * g[0] / (a[0] + g[0])
-    return float(s * np.sqrt(sx / g[0])), float(s * np.sqrt(sy / g[0]))
+    three = cv2.merge([m8, edge, gap])
+    cols = cv2.reduce(three, 0, cv2.REDUCE_SUM, dtype=cv2.CV_64F).reshape(-1, 3)  # (w, 3): Σ per column
+    rows = cv2.reduce(three, 1, cv2.REDUCE_SUM, dtype=cv2.CV_64F).reshape(-1, 3)  # (h, 3)
+    x, y = np.arange(bw, dtype=np.float64), np.arange(bh, dtype=np.float64)
+    n, sx, sy, sxx, syy = cols.sum(axis=0), x @ cols, y @ rows, (x * x) @ cols, (y * y) @ rows
+    cx, cy = sx[0] / n[0], sy[0] / n[0]
+    # Σ (x - cx)², Σ (y - cy)² of the edge's (1) and the gap's (2) pixels about the mask's centroid
+    vx = np.maximum(sxx - 2.0 * cx * sx + cx * cx * n, 0.0)
+    vy = np.maximum(syy - 2.0 * cy * sy + cy * cy * n, 0.0)
+    edge_px = (float(EDGE_PX * np.sqrt(vx[1]) / n[0]), float(EDGE_PX * np.sqrt(vy[1]) / n[0]))
+    if n[2] == 0:
+        return edge_px, (0.0, 0.0)
+    share = kappa * n[2] / (n[0] + n[2])
+    return edge_px, (float(share * np.sqrt(vx[2] / n[2])), float(share * np.sqrt(vy[2] / n[2])))
 
 
 class HeightHistory:
@@ -125,7 +120,7 @@ class HeightHistory:
             seen = []
         out = 0.0
         if len(seen) >= self.min_frames:
-            expected = float(np.median(seen)) * disparity
+            expected = statistics.median(seen) * disparity  # a few µs on 15 floats, unlike np.median
             out = 0.5 * max(abs(height_px - expected) - self.round_px, 0.0)
         seen = (seen + [height_px / disparity])[-self.frames:]
         self._kept[track_id] = (index, seen)
