@@ -1,12 +1,15 @@
 """How far off the centroid of eq. (10) may lie because the outline itself is imperfect (issue 12 item 1).
 
-Two terms, both from the mask alone (no truth), each a 1-σ in px along x and y:
+Three terms, from the mask and the track's recent masks alone (no truth), each a 1-σ in px along x and y
+(y only for the last), added in quadrature to the centroid's other terms (tracker.pipeline):
 
 `edge_quantisation_px`: an outline is a set of whole pixels. Each edge pixel stands for a piece of the true
 outline that covers some fraction of it, unknown and evenly spread over [0, 1] as the target moves by
-fractions of a pixel: a pixel's worth of area off by 1/√12 px² rms, edge pixel by edge pixel. An edge
-pixel put in or left out moves the centroid by (its position - the centroid) / the area (as in
-tracker.outline, whose warped edges are off by more), so
+fractions of a pixel: a pixel's worth of area off by 1/√12 px² rms, edge pixel by edge pixel, and
+independent along the edge, since whether a partly covered pixel passes the threshold depends on the
+target's texture and the background behind it there. An edge pixel put in or left out moves the
+centroid by (its position - the centroid) / the area (as in tracker.outline, whose warped edges are off by
+more), so
 
     σ_cx² = Σ_edge (x_i - c_x)² / (12 A²),   σ_cy² = Σ_edge (y_i - c_y)² / (12 A²)   (px², A in px).
 
@@ -27,6 +30,10 @@ centroid along each axis,
 
 A convex outline (a plate, a sphere seen whole) has no gap and no such term; a merged or badly cut mask, a
 large one. The pixels a body loses beyond the hull (a head past the neck's gap) are not in it.
+
+`HeightHistory`: a piece lost or gained at the top or bottom shows as a change of the outline's height that
+the target's change of range does not explain (see the class). The first two cost about 0.15 ms a target
+together and go through tracker.schedule.SigmaSchedule; the third, a few µs, is worked out every frame.
 """
 
 from __future__ import annotations
