@@ -11,6 +11,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 
+import cv2
 import numpy as np
 from numpy.typing import NDArray
 
@@ -24,6 +25,7 @@ from tracker.localize import Localization, Localizer
 from tracker.outline import OutlineConfig, warped_outline_sigma_px
 from tracker.rectify import Rectifier
 from tracker.schedule import SigmaSchedule, SigmaTerms, VerifySchedule
+from tracker.segmentation import HeightHistory, outline_sigma_px
 from tracker.split import join_occluded, join_parts
 from tracker.temporal import TemporalConfig, TemporalDetector, without_duplicates
 from tracker.tracks import MultiTracker, TrackerConfig
@@ -90,10 +92,11 @@ class Pipeline:
         self.subtractor = StereoSubtractor(self.bg, detector)
         self.verifier = Verifier(self.subtractor, self.rect)
         self.temporal = TemporalDetector(self.subtractor, self.verifier, temporal)
-        self.localizer = Localizer(self.rect, origin)
+        self.localizer = Localizer(self.rect, origin, centroid_sigma_px=0.0)  # the outline's own: _centroid_extra
         self.tracker = MultiTracker(tracker)
         self.schedule = VerifySchedule(verify_budget_ms)
         self.sigma_schedule = SigmaSchedule(sigma_budget_ms)
+        self.heights = HeightHistory()
         self.visibility = VisibilityConfig()
         self.outline = OutlineConfig()
         self._last_gain = 1.0
@@ -148,6 +151,7 @@ class Pipeline:
         obs = np.array([[b.centroid_raw[0], b.centroid_raw[1], b.disparity] for b in blobs]).reshape(-1, 3)
         ids = self.tracker.update(frame.t, obs)  # from centroids and disparities alone (not their σ)
         self.sigma_schedule.keep_only([tr.track_id for tr in self.tracker.tracks])
+        self.heights.keep_only([tr.track_id for tr in self.tracker.tracks])
         t_ids = time.perf_counter()
         locs = [self._locate(frame, b, blobs, i, t0) for b, i in zip(blobs, ids, strict=True)]
         t3 = time.perf_counter()
@@ -175,11 +179,15 @@ class Pipeline:
         return cm.disparity, cm.valid
 
     def _locate(self, frame: StereoFrame, b: Blob, blobs: list[Blob], track_id: int, start: float) -> Localization:
-        """eq. (1-2) for a blob, with its 1-σ: the matcher's, and the costlier terms (SigmaTerms)."""
+        """eq. (1-2) for a blob, with its 1-σ: the matcher's, the costlier terms (SigmaTerms) and, every
+        frame, a piece lost or gained at the outline's top or bottom (tracker.segmentation.HeightHistory)."""
         terms = self.sigma_schedule.terms(track_id, frame.index, start, lambda: SigmaTerms(
             self._disparity_sigma(frame, b), self._centroid_extra(frame, b, blobs)))
+        jump = self.heights.sigma_px(track_id, frame.index, float(cv2.boundingRect(b.mask.view(np.uint8))[3]),
+                                     b.disparity)
+        cx, cy = terms.centroid_px
         return self.localizer.locate(b.centroid_rect, b.disparity, max(b.disparity_sigma, terms.disparity_px),
-                                     b.area, frame.gimbal, terms.centroid_px)
+                                     b.area, frame.gimbal, (cx, float(np.hypot(cy, jump))))
 
     def _disparity_sigma(self, frame: StereoFrame, b: Blob) -> float:
         """The scatter of the disparities of the blob's parts (px; tracker.disparity_sigma: correlated
@@ -188,13 +196,16 @@ class Pipeline:
         return scatter_sigma(self.verifier.part_disparities(frame, b))
 
     def _centroid_extra(self, frame: StereoFrame, b: Blob, blobs: list[Blob]) -> tuple[float, float]:
-        """The centroid's further 1-σ (px, x and y): where the target is seen in part, and where its outline
-        is drawn by warping (no temporal model at this pose: the cameras move; tracker.outline); in
-        quadrature, the two being independent."""
+        """The centroid's further 1-σ (px, x and y): where the target is seen in part, where its outline
+        is drawn by warping (no temporal model at this pose: the cameras move; tracker.outline), the
+        outline's whole pixels and the parts of a body its segmentation may have missed in the notches of
+        its outline (tracker.segmentation); in quadrature, all being independent."""
         others = [e for o in blobs if o is not b for e in object_and_shadow(o.box, o.mask, o.disparity, o.bg_disparity)]
         px, py = self._partly_seen(frame, b, others)
+        terms = list(outline_sigma_px(b.mask))
         if self.subtractor.left_background(frame.gimbal) is None:
-            ox, oy = warped_outline_sigma_px(b.mask, self.outline)
+            terms.append(warped_outline_sigma_px(b.mask, self.outline))
+        for ox, oy in terms:
             px, py = float(np.hypot(px, ox)), float(np.hypot(py, oy))
         return px, py
 

@@ -75,7 +75,8 @@ class VerifySchedule:
 class SigmaTerms:
     """The costly terms of a target's 1-σ (tracker.pipeline): disparity_px, the scatter of its parts'
     disparities (px, tracker.disparity_sigma); centroid_px, the centroid's further 1-σ (px, x and y) where
-    it is seen in part or its outline is drawn by warping (tracker.visibility, tracker.outline)."""
+    it is seen in part or its outline is drawn by warping (tracker.visibility, tracker.outline), and from
+    the outline's whole pixels and a body's hull gap (tracker.segmentation)."""
 
     disparity_px: float
     centroid_px: tuple[float, float]
