@@ -36,8 +36,9 @@ class Settings(BaseSettings):
                                     "than this (ms); the rest wait for the next frame, where they come first, and "
                                     "are counted in the status (deferred_boxes). Bounds a busy frame's latency; "
                                     "0: no bound")
-    sigma_budget_ms: float = Field(4.0, ge=0, le=1000, description="real time: a tracked target's costlier 1-σ "
-                                   "terms (the scatter of its parts' disparities, a partly seen or warped outline) "
+    sigma_budget_ms: float = Field(3.0, ge=0, le=1000, description="real time: a tracked target's costlier 1-σ "
+                                   "terms (the scatter of its parts' disparities, a partly seen or warped outline, "
+                                   "the outline's edge pixels and hull gap) "
                                    "are worked out afresh only while the frame's tracker step is younger than this "
                                    "(ms), else taken from the same track within the last 15 frames; counted in the "
                                    "status (reused_sigma). Bounds a busy frame's latency; 0: every frame")
