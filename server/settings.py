@@ -32,15 +32,17 @@ class Settings(BaseSettings):
                                                 "the simulated source, none with a real one")
     realtime: bool = Field(True, description="pace the tracker at the source's frame rate")
     verify_budget_ms: float = Field(2.0, ge=0, le=1000, description="real time: candidate boxes that hold no "
-                                    "track's prediction are verified only while the frame's tracker step is younger "
-                                    "than this (ms); the rest wait for the next frame, where they come first, and "
-                                    "are counted in the status (deferred_boxes). Bounds a busy frame's latency; "
+                                    "track's prediction, and regions beside a tracked object that hold none, are "
+                                    "verified only while the frame's tracker step is younger than this (ms); the rest "
+                                    "wait for the next frame, where they come first, and are counted in the status "
+                                    "(deferred_boxes). Bounds a busy frame's latency; "
                                     "0: no bound")
     sigma_budget_ms: float = Field(3.0, ge=0, le=1000, description="real time: a tracked target's costlier 1-σ "
                                    "terms (the scatter of its parts' disparities, a partly seen or warped outline, "
                                    "the outline's edge pixels and hull gap) "
-                                   "are worked out afresh only while the frame's tracker step is younger than this "
-                                   "(ms), else taken from the same track within the last 15 frames; counted in the "
+                                   "are worked out afresh only when, at what they cost the last time, they would end "
+                                   "within this many ms of the frame's tracker step, else taken from the same track "
+                                   "within the last 15 frames; counted in the "
                                    "status (reused_sigma). Bounds a busy frame's latency; 0: every frame")
     token_ttl_s: int = Field(12 * 3600, ge=5, le=30 * 86400, description="absolute session lifetime (s): a login "
                                                                        "ends this long after it was made")

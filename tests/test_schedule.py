@@ -28,7 +28,7 @@ def run(s: VerifySchedule, clock: Clock, boxes: list[Box]) -> tuple[list[Box], l
     """(verified boxes in verification order, the results in return order, boxes put off)."""
     order: list[Box] = []
 
-    def verify(b: Box) -> list[Box]:
+    def verify(b: Box, may_search: object = None) -> list[Box]:
         order.append(b)
         clock.t += clock.cost
         return [b]
@@ -63,6 +63,42 @@ def test_within_the_budget_the_results_are_those_of_no_budget() -> None:
     boxes = [SMALL, TRACKED, BIG, MID]
     _, results, put_off = run(VerifySchedule(4.0, clock), clock, boxes)
     assert results == boxes and put_off == 0
+
+
+TRACKED2: Box = (200, 100, 240, 180)
+HINTS2 = np.array([[120.0, 150.0, 20.0], [220.0, 150.0, 20.0]])
+
+
+def test_a_spent_budget_puts_off_the_new_object_search_beside_a_tracked_object_once_a_frame() -> None:
+    clock = Clock(0.003)  # 3 ms per region searched
+    s = VerifySchedule(4.0, clock)
+    asked: list[tuple[Box, bool]] = []
+
+    def verify(b: Box, may_search: object = None) -> list[Box]:
+        clock.t += clock.cost  # the tracked object itself
+        assert callable(may_search)  # a tracked box: its other regions go through the budget
+        ok = bool(may_search())
+        asked.append((b, ok))
+        if ok:
+            clock.t += clock.cost  # the region beside it, searched over the whole disparity range
+        return [b]
+    results, put_off = s.run([TRACKED, TRACKED2], HINTS2, verify, start=0.0)
+    # 3 ms: the first box's other region is searched (within 4 ms); at 9 ms the second's is put off
+    assert asked == [(TRACKED, True), (TRACKED2, False)] and results == [TRACKED, TRACKED2] and put_off == 1
+    clock.t, asked[:] = 0.0, []
+    _, put_off = s.run([TRACKED, TRACKED2], HINTS2, verify, start=0.0)
+    # next frame: the box put off comes first and is searched within the budget; the other is put off
+    assert asked == [(TRACKED2, True), (TRACKED, False)] and put_off == 1
+    for late in (TRACKED, TRACKED2, TRACKED):  # each frame starts late: one box put off passes, in turn
+        clock.t, asked[:] = 0.01, []
+        _, put_off = s.run([TRACKED, TRACKED2], HINTS2, verify, start=0.0)
+        assert asked == [(late, True), (TRACKED2 if late == TRACKED else TRACKED, False)] and put_off == 1
+
+
+def test_without_a_budget_nothing_asks_before_searching() -> None:
+    seen: list[object] = []
+    VerifySchedule(None).run([TRACKED, SMALL], HINTS, lambda b, may_search: seen.append(may_search) or [b])
+    assert seen == [None, None]
 
 
 class Terms:
@@ -114,3 +150,18 @@ def test_sigma_terms_of_ended_tracks_are_forgotten() -> None:
     s.terms(1, 1, 0.0, work)  # forgotten: worked out again
     s.terms(2, 1, 0.0, work)  # kept
     assert work.calls == 3 and s.reused == 1
+
+
+def test_terms_that_would_end_past_the_budget_by_their_last_cost_are_kept() -> None:
+    clock = Clock(0.0)
+    s = SigmaSchedule(budget_ms=4.0, clock=clock)
+    work = Terms(clock, 0.002)  # 2 ms to work out
+    first = s.terms(1, 0, 0.0, work)
+    clock.t = 0.0015  # 1.5 ms into the next step: 1.5 + 2 <= 4, worked out
+    second = s.terms(1, 1, 0.0, work)
+    assert work.calls == 2 and second != first
+    clock.t = 0.0025  # 2.5 + 2 > 4 though the budget is not spent yet: kept
+    assert s.terms(1, 2, 0.0, work) is second and work.calls == 2 and s.reused == 1
+    clock.t = 0.0025
+    s.terms(2, 2, 0.0, work)  # a new track: worked out whatever it costs
+    assert work.calls == 3

@@ -56,6 +56,7 @@ async def _client(url: str, token: str, seconds: float, out: dict[str, Any], win
     import websockets
 
     frames: list[int] = []
+    steps: list[float] = []  # the tracker's step_ms of the messages in the window
     counted = 0
     async with websockets.connect(url, additional_headers={"Authorization": f"Bearer {token}"},
                                   max_queue=None) as ws:
@@ -65,9 +66,13 @@ async def _client(url: str, token: str, seconds: float, out: dict[str, Any], win
                 msg = await asyncio.wait_for(ws.recv(), left)
             except TimeoutError:
                 break
-            frames.append(int(json.loads(msg)["frame"]))
-            counted += bool(window_start) and time.monotonic() >= window_start[0]
+            tm = json.loads(msg)
+            frames.append(int(tm["frame"]))
+            if window_start and time.monotonic() >= window_start[0]:
+                counted += 1
+                steps.append(float(tm.get("step_ms") or 0.0))
     out["messages"] = counted
+    out["step_ms"] = steps
     out["increasing"] = all(b > a for a, b in zip(frames, frames[1:], strict=False))
 
 
@@ -146,6 +151,8 @@ def run_webrtc_bench(seconds: float, client_counts: list[int], extra: list[str])
 
 
 def _report(m: dict[str, Any], seconds: float, cpu: float) -> dict[str, Any]:
+    from server.services.monitor import percentiles
+
     s0, s1 = m["status_before"], m["status_after"]
     frames = (s1["frame"] - s0["frame"]) or 1
     skipped = s1["skipped_frames"] - s0["skipped_frames"]
@@ -154,7 +161,8 @@ def _report(m: dict[str, Any], seconds: float, cpu: float) -> dict[str, Any]:
             "frames": frames, "skipped_frames": skipped, "skipped_pct": round(100.0 * skipped / frames, 3),
             "deferred_boxes": s1.get("deferred_boxes", 0) - s0.get("deferred_boxes", 0),
             "reused_sigma": s1.get("reused_sigma", 0) - s0.get("reused_sigma", 0),
-            "fps": s1["fps"], "event_loop_lag_ms": s1["event_loop_lag_ms"],
+            "fps": s1["fps"], "step_ms": percentiles(m["clients"][0]["step_ms"]),
+            "event_loop_lag_ms": s1["event_loop_lag_ms"],
             "ws_send_latency_ms": s1["ws_send_latency_ms"], "ws_delivery_ms": s1["ws_delivery_ms"],
             "cpu_cores": round(cpu, 3),
             "messages_per_s_per_client": {"min": round(min(rates), 2), "max": round(max(rates), 2)},

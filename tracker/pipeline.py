@@ -81,11 +81,13 @@ class Pipeline:
                  tracker: TrackerConfig | None = None, origin: F64 | None = None,
                  temporal: TemporalConfig | None = None, verify_budget_ms: float | None = None,
                  sigma_budget_ms: float | None = None):
-        """verify_budget_ms: in real time, candidate boxes that hold no track's prediction are verified only
-        while the frame's step is younger than this (ms); the others wait for the next frame (None: all are
+        """verify_budget_ms: in real time, candidate boxes that hold no track's prediction, and regions
+        beside a tracked object that hold none, are verified only while the frame's step is younger than
+        this (ms); the others wait for the next frame (tracker.schedule.VerifySchedule; None: all are
         verified, as offline evaluation needs for repeatable results). sigma_budget_ms: in real time, a
-        tracked target's costly 1-σ terms are worked out afresh only while the step is younger than this
-        (ms), else taken from a recent frame (tracker.schedule.SigmaSchedule; None: every frame)."""
+        tracked target's costly 1-σ terms are worked out afresh only when they would end within this many
+        ms of the step's start, else taken from a recent frame (tracker.schedule.SigmaSchedule; None:
+        every frame)."""
         self.rig = rig
         self.rect = Rectifier(rig)
         self.bg = BackgroundDepth(self.rect, near_m=(detector or DetectorConfig()).near_m)
@@ -142,7 +144,8 @@ class Pipeline:
         t1 = time.perf_counter()
         hints = self.tracker.predictions(frame.t)
         boxes = cands.worth_verifying(self.subtractor.cfg.moving_min_cells, hints)
-        blobs, deferred = self.schedule.run(boxes, hints, lambda box: self.verifier.verify_all(frame, box, hints), t0)
+        blobs, deferred = self.schedule.run(boxes, hints, lambda box, may_search: self.verifier.verify_all(
+            frame, box, hints, may_search=may_search), t0)
         blobs = join_parts(without_duplicates(blobs), self.rect.area_moments)  # one object again, or a part
         blobs = self.temporal.detect(frame, blobs, hints)  # cameras still: objects too near their background
         blobs = join_occluded(blobs, lambda box: self._background_disparity(frame, box),  # one body, two sides

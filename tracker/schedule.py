@@ -8,6 +8,9 @@ budget, the boxes that hold a track's predicted position are verified first and 
 those put off the frame before first, then the largest. Any but the first of them that would start once
 the budget is spent is put off to the next frame, where it comes first: one box that holds no prediction
 is verified every frame, so a queue of put-off boxes drains even while tracked ones use up the budget.
+Inside a tracked box, the regions beside the tracked objects that hold no prediction are searched as new
+objects (the costliest verification: over the whole disparity range) under the same budget; once it is
+spent, one such box put off the frame before is searched a frame, the others put off again.
 Without a budget every box is verified, in the candidate stage's order, as before.
 """
 
@@ -47,17 +50,21 @@ class VerifySchedule:
             return (0 if held[i] else 1, 0 if put_off else 1, -(b[2] - b[0]) * (b[3] - b[1]))
         return sorted(range(len(boxes)), key=key)
 
-    def run(self, boxes: Sequence[Box], hints: NDArray[np.float64] | None, verify: Callable[[Box], list[T]],
-            start: float | None = None) -> tuple[list[T], int]:
-        """verify(box) for the boxes within the budget, counted from `start` (clock seconds; default now).
-        Returns the results concatenated in the boxes' own order, and how many boxes were put off."""
+    def run(self, boxes: Sequence[Box], hints: NDArray[np.float64] | None,
+            verify: Callable[[Box, Callable[[], bool] | None], list[T]], start: float | None = None
+            ) -> tuple[list[T], int]:
+        """verify(box, may_search) for the boxes within the budget, counted from `start` (clock seconds;
+        default now). may_search: for a box that holds a prediction, asked before each of its regions
+        that holds none is searched as a new object (None: always search; see `_may_search`). Returns
+        the results concatenated in the boxes' own order, and how many boxes were put off (whole, or
+        their regions that hold no prediction)."""
         if self.budget_ms is None:
-            return [r for b in boxes for r in verify(b)], 0
+            return [r for b in boxes for r in verify(b, None)], 0
         t0 = self.clock() if start is None else start
         deadline = t0 + self.budget_ms * 1e-3
         done: dict[int, list[T]] = {}
         put_off: list[Box] = []
-        untracked = 0
+        untracked, passed = 0, [False]
         held = [holds_prediction(b, hints) for b in boxes]
         for i in self._order(boxes, held):
             b = boxes[i]
@@ -66,9 +73,28 @@ class VerifySchedule:
                     put_off.append(b)
                     continue
                 untracked += 1
-            done[i] = verify(b)
-        self._put_off = tuple(put_off)
-        return [r for i in range(len(boxes)) for r in done.get(i, [])], len(put_off)
+                done[i] = verify(b, None)
+            else:
+                done[i] = verify(b, self._may_search(b, deadline, put_off, passed))
+        self._put_off = tuple(dict.fromkeys(put_off))
+        return [r for i in range(len(boxes)) for r in done.get(i, [])], len(self._put_off)
+
+    def _may_search(self, box: Box, deadline: float, put_off: list[Box], passed: list[bool]
+                    ) -> Callable[[], bool]:
+        """Whether a region of a tracked box that holds no prediction (something beside the tracked
+        object: a new object, or leaves) is searched now: while the budget lasts; once it is spent, only
+        where the box overlaps one put off the frame before, once a frame (passed[0]), so that what is
+        put off is searched within a frame or two even while tracked objects use up the budget. Else
+        the box is put off."""
+        def ask() -> bool:
+            if self.clock() <= deadline:
+                return True
+            if not passed[0] and any(_overlaps(box, p) for p in self._put_off):
+                passed[0] = True
+                return True
+            put_off.append(box)
+            return False
+        return ask
 
 
 @dataclass(frozen=True)
@@ -85,29 +111,31 @@ class SigmaTerms:
 class SigmaSchedule:
     """Which targets have their SigmaTerms worked out afresh in a frame with a time budget.
 
-    The terms cost about 1 ms a target; they change slowly (the target's size, texture, what hides it).
-    With a budget, a tracked target whose terms were worked out within the last `max_age` frames keeps
-    them once the frame's step is older than budget_ms; a new track, or terms older than that, are always
-    worked out. budget_ms None: always worked out (evaluations, offline)."""
+    The terms cost 0.3 to 2.5 ms a target; they change slowly (the target's size, texture, what hides
+    it). With a budget, a tracked target whose terms were worked out within the last `max_age` frames
+    keeps them when working them out again would end after budget_ms of the frame's step (by what they
+    cost the last time); a new track, or terms older than that, are always worked out. budget_ms None:
+    always worked out (evaluations, offline)."""
 
     def __init__(self, budget_ms: float | None = None, max_age: int = 15,
                  clock: Callable[[], float] = time.perf_counter):
         self.budget_ms = budget_ms
         self.max_age = max_age
         self.clock = clock
-        self._kept: dict[int, tuple[int, SigmaTerms]] = {}  # track id -> (frame index, terms)
+        self._kept: dict[int, tuple[int, SigmaTerms, float]] = {}  # track id -> (frame index, terms, cost ms)
         self.reused = 0  # terms taken from an earlier frame (counted for the status)
 
     def terms(self, track_id: int, index: int, start: float, work: Callable[[], SigmaTerms]) -> SigmaTerms:
         """The track's terms at frame `index`: work() when due, else those kept. start: the step's start
         (clock seconds)."""
         kept = self._kept.get(track_id)
+        now = self.clock()
         if (self.budget_ms is not None and kept is not None and 0 <= index - kept[0] <= self.max_age
-                and (self.clock() - start) * 1e3 > self.budget_ms):
+                and (now - start) * 1e3 + kept[2] > self.budget_ms):
             self.reused += 1
             return kept[1]
         got = work()
-        self._kept[track_id] = (index, got)
+        self._kept[track_id] = (index, got, (self.clock() - now) * 1e3)
         return got
 
     def keep_only(self, track_ids: Sequence[int]) -> None:

@@ -9,6 +9,7 @@ exactly; Ivanov, Bobick and Liu's verification by warping in both directions).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import cv2
@@ -148,11 +149,13 @@ class Verifier:
         self.rect = rect
         self.cfg = sub.cfg
 
-    def verify_all(self, frame: StereoFrame, box: Box, hints: F64 | None = None, max_objects: int = 3
-                   ) -> list[Blob]:
+    def verify_all(self, frame: StereoFrame, box: Box, hints: F64 | None = None, max_objects: int = 3,
+                   may_search: Callable[[], bool] | None = None) -> list[Blob]:
         """Verify a candidate box, which may hold several objects (one passing in front of another):
         the largest first, then what is left once its pixels are taken out.
-        hints: (N, 3) predicted (x, y, disparity) of tracks in raw left pixels (narrows the search)."""
+        hints: (N, 3) predicted (x, y, disparity) of tracks in raw left pixels (narrows the search).
+        may_search: asked before a region that holds no hint is searched as a new object; False leaves
+        it out this frame (tracker.schedule: the frame's time budget). None: always searched."""
         cfg = self.cfg
         x0, y0, x1, y1 = box
         cm = self.sub.correspondence(0, frame.gimbal, box)
@@ -171,8 +174,9 @@ class Verifier:
                 break
             hint = nearest_hint(hints, m_left, box)
             around = hints_around(hints, m_left, box)
-            got = None if self._too_small_to_be_new(n_left, hint) else self._verify_region(frame, box, cm, m_left,
-                                                                                          hint, free, around)
+            new_later = hint is None and may_search is not None and not may_search()
+            got = None if new_later or self._too_small_to_be_new(n_left, hint) else self._verify_region(
+                frame, box, cm, m_left, hint, free, around)
             if got is None:
                 m_raw = m_raw & ~m_left  # not an object: try what else the box holds
                 continue

@@ -23,9 +23,10 @@ class RuntimeConfig:
     worker at the source's frame rate (frames that could not be processed in time are skipped and
     counted); otherwise run as fast as possible. max_frames: stop after this many processed frames.
     origin: (X, Y, Z) m, the point about which r, θ, φ are given. verify_budget_ms: with realtime, the
-    tracker step's time budget for candidate boxes that hold no track's prediction (None: no bound; see
-    tracker.schedule). sigma_budget_ms: with realtime, a tracked target's costly 1-σ terms are worked out
-    afresh only while the step is younger than this, else taken from a recent frame (None: every frame;
+    tracker step's time budget for candidate boxes (and regions beside tracked objects) that hold no
+    track's prediction (None: no bound; see tracker.schedule). sigma_budget_ms: with realtime, a tracked
+    target's costly 1-σ terms are worked out afresh only when they would end within this many ms of the
+    step's start, else taken from a recent frame (None: every frame;
     tracker.schedule.SigmaSchedule). baseline_limits_m: the plausible
     baselines (m) a rig file is checked against (default tracker.rigcheck.BASELINE_LIMITS_M, 1 cm to 10 m)."""
 
