@@ -66,7 +66,7 @@ def test_replay_tracks_are_stored_apart(server: Server) -> None:
         assert job["settings"]["threshold"] == 12 and job["settings"]["rig"] == "live"
         live_tm = c.get("/api/telemetry", params={"start": start, "end": end}).json()
         assert job["frames"] == job["agreement"]["frames"] > 0.9 * len(live_tm)
-        assert job["agreement"]["same_detected"] > 0.9  # unchanged settings: nearly the live result
+        assert job["agreement"]["same_detected"] > 0.9, job["agreement"]  # unchanged settings: nearly the live result
         replayed = c.get("/api/tracks", params={"replay": job["id"]}).json()
         live = c.get("/api/tracks").json()
         assert all(t["replay_id"] == job["id"] and t["run_id"].startswith("replay-") for t in replayed)

@@ -19,6 +19,7 @@ from tracker.bgdepth import BackgroundDepth
 from tracker.bglearn import LearntBackground, Sighting, StreamLearnConfig, StreamLearner, changed_box
 from tracker.detect import Box, DetectorConfig, StereoSubtractor, paint_masks
 from tracker.disparity_sigma import scatter_sigma
+from tracker.egomotion import PoseCompensation
 from tracker.frames import StereoFrame
 from tracker.geometry import StereoRig
 from tracker.localize import Localization, Localizer
@@ -96,6 +97,7 @@ class Pipeline:
         self.temporal = TemporalDetector(self.subtractor, self.verifier, temporal)
         self.localizer = Localizer(self.rect, origin, centroid_sigma_px=0.0)  # the outline's own: _centroid_extra
         self.tracker = MultiTracker(tracker)
+        self.ego = PoseCompensation(rig.left)
         self.schedule = VerifySchedule(verify_budget_ms)
         self.sigma_schedule = SigmaSchedule(sigma_budget_ms)
         self.heights = HeightHistory()
@@ -142,7 +144,7 @@ class Pipeline:
         t0 = time.perf_counter()
         cands = self.subtractor.step(frame)
         t1 = time.perf_counter()
-        hints = self.tracker.predictions(frame.t)
+        hints = self.ego.from_home(self.tracker.predictions(frame.t), frame.gimbal)  # at this frame's pose
         boxes = cands.worth_verifying(self.subtractor.cfg.moving_min_cells, hints)
         blobs, deferred = self.schedule.run(boxes, hints, lambda box, may_search: self.verifier.verify_all(
             frame, box, hints, may_search=may_search), t0)
@@ -152,7 +154,8 @@ class Pipeline:
                               self.subtractor.cfg.min_depth_gap, self.rect.area_moments)
         t2 = time.perf_counter()
         obs = np.array([[b.centroid_raw[0], b.centroid_raw[1], b.disparity] for b in blobs]).reshape(-1, 3)
-        ids = self.tracker.update(frame.t, obs)  # from centroids and disparities alone (not their σ)
+        # from centroids and disparities alone (not their σ), as seen at home: the mount's turning taken out
+        ids = self.tracker.update(frame.t, self.ego.to_home(obs, frame.gimbal))
         self.sigma_schedule.keep_only([tr.track_id for tr in self.tracker.tracks])
         self.heights.keep_only([tr.track_id for tr in self.tracker.tracks])
         t_ids = time.perf_counter()

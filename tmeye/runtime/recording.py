@@ -12,6 +12,7 @@ with one line (nothing recorded in the range, end before start, a data directory
 from __future__ import annotations
 
 import json
+import math
 import sqlite3
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -107,11 +108,24 @@ def _decode(data_dir: Path, segs: list[tuple[str, int]]) -> Iterator[tuple[int, 
                 continue
 
 
+def _frame_time(tm: RecordedTelemetry) -> tuple[float, float]:
+    """The times the live tracker was given for a recorded frame: (t, right - left offset) in s, from its
+    telemetry (the simulator's scene time, a camera's monotonic clock); the capture time (Unix s) where a
+    recording has none. The tracker's velocities come from these: the capture times, stamped by the wall
+    clock after the frame was made, jitter by milliseconds under load, and the replay would track
+    differently from the live run."""
+    t, offset = tm.data.get("t"), tm.data.get("offset_s", 0.0)
+    if isinstance(t, (int, float)) and math.isfinite(t) and isinstance(offset, (int, float)) and math.isfinite(offset):
+        return float(t), float(offset)
+    return tm.captured_at, 0.0
+
+
 class RecordingSource:
     """FrameSource over the recordings of start..end (Unix s) in `data_dir`. A pair is read when both
     cameras decoded a frame of the same pts that has recorded telemetry (a frame only one camera
     recorded is skipped and counted). `index` of a frame: its recorded runtime frame number; its times:
-    the recorded capture time (Unix s)."""
+    those the live tracker had (`_frame_time`); `captured_at`: the recorded capture time (Unix s) of the
+    pair read last."""
 
     def __init__(self, data_dir: Path, start: float, end: float):
         self.data_dir, self.start, self.end = data_dir, start, end
@@ -123,6 +137,7 @@ class RecordingSource:
         self.t0, self.t1 = round(start * CLOCK_HZ), round(end * CLOCK_HZ)
         self._its = {c: _decode(data_dir, segs[c]) for c in CAMERAS}
         self.read_pairs = self.unpaired = 0
+        self.captured_at = math.nan  # the recorded capture time (Unix s) of the pair read last
         self.fps = self._fps()
 
     def _fps(self) -> float:
@@ -157,8 +172,10 @@ class RecordingSource:
     def _pair(self, pts: int, left: av.VideoFrame, right: av.VideoFrame) -> StereoFrame:
         tm = self.telemetry[pts]
         self.read_pairs += 1
+        self.captured_at = tm.captured_at
         grey: list[U8] = [np.ascontiguousarray(f.to_ndarray(format="gray")) for f in (left, right)]
-        return StereoFrame(tm.frame_no, grey[0], grey[1], tm.captured_at, tm.captured_at, tm.gimbal)
+        t, offset = _frame_time(tm)
+        return StereoFrame(tm.frame_no, grey[0], grey[1], t, t + offset, tm.gimbal)
 
     def close(self) -> None:
         for it in self._its.values():

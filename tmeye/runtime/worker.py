@@ -271,7 +271,10 @@ class Runtime:
         if comp.config.source in ("usb", "rtsp"):  # live stamps are time.monotonic()
             captured_at = time.time() - (time.monotonic() - frame.t)
         elif comp.config.source == "recording":  # replayed: the recorded capture time
-            captured_at = frame.t
+            from tmeye.runtime.recording import RecordingSource  # PyAV only for replays
+
+            assert isinstance(comp.source, RecordingSource)
+            captured_at = comp.source.captured_at
         try:
             ev = self._process(frame, captured_at)
         except Exception as exc:
