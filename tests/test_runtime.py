@@ -40,6 +40,20 @@ def test_a_blocking_consumer_never_stalls_the_publisher() -> None:
     assert all(s["queued"] == 2 for s in hub.stats())
 
 
+def test_subscriptions_made_first_are_notified_before_the_others_in_their_own_order() -> None:
+    hub: Hub[int] = Hub()
+    woken: list[str] = []
+    for name, first in (("encoder", False), ("ws-1", True), ("writer", False), ("ws-2", True)):
+        hub.subscribe(maxsize=2, notify=lambda n=name: woken.append(n), name=name, first=first)
+    hub.publish(1)
+    assert woken == ["ws-1", "ws-2", "encoder", "writer"]
+    hub.unsubscribe(next(s for s in hub._subs if s.name == "ws-1"))
+    woken.clear()
+    hub.subscribe(maxsize=2, notify=lambda: woken.append("ws-3"), name="ws-3", first=True)
+    hub.publish(2)
+    assert woken == ["ws-2", "ws-3", "encoder", "writer"]
+
+
 def test_subscription_get_ends_when_closed() -> None:
     hub: Hub[int] = Hub()
     sub = hub.subscribe(maxsize=4)

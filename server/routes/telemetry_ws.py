@@ -42,7 +42,7 @@ async def telemetry_ws(ws: WebSocket) -> None:
     loop = asyncio.get_running_loop()
     ready = asyncio.Event()
     sub = ctx.runtime.hub.subscribe(maxsize=ctx.settings.ws_queue,
-                                    notify=lambda: loop.call_soon_threadsafe(ready.set), name="ws")
+                                    notify=lambda: loop.call_soon_threadsafe(ready.set), name="ws", first=True)
     reader = asyncio.create_task(_drain_client(ws))
     reader.add_done_callback(lambda _t: ready.set())
     try:

@@ -72,20 +72,28 @@ class Hub(Generic[T]):
     """The set of subscriptions of one producer. Thread-safe."""
 
     def __init__(self) -> None:
-        self._subs: list[Subscription[T]] = []
+        self._subs: list[Subscription[T]] = []  # those subscribed `first` ahead of the others
+        self._first: set[Subscription[T]] = set()
         self._lock = threading.Lock()
 
     def subscribe(self, maxsize: int = 4, notify: Callable[[], Any] | None = None,
-                  name: str = "") -> Subscription[T]:
+                  name: str = "", first: bool = False) -> Subscription[T]:
+        """A new subscription. first: put and notified before those without (a consumer someone waits on,
+        such as a telemetry WebSocket, is woken before the H.264 encoder takes the GIL for the frame)."""
         sub: Subscription[T] = Subscription(maxsize, notify, name)
         with self._lock:
-            self._subs.append(sub)
+            if first:
+                self._subs.insert(sum(1 for s in self._subs if s in self._first), sub)
+                self._first.add(sub)
+            else:
+                self._subs.append(sub)
         return sub
 
     def unsubscribe(self, sub: Subscription[T]) -> None:
         with self._lock:
             if sub in self._subs:
                 self._subs.remove(sub)
+            self._first.discard(sub)
         sub.close()
 
     @property
@@ -112,5 +120,6 @@ class Hub(Generic[T]):
     def close(self) -> None:
         with self._lock:
             subs, self._subs = list(self._subs), []
+            self._first.clear()
         for sub in subs:
             sub.close()
