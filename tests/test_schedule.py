@@ -81,10 +81,12 @@ def test_a_spent_budget_puts_off_the_new_object_search_beside_a_tracked_object_o
         asked.append((b, ok))
         if ok:
             clock.t += clock.cost  # the region beside it, searched over the whole disparity range
+            return [b, b]  # and a new object found there
         return [b]
     results, put_off = s.run([TRACKED, TRACKED2], HINTS2, verify, start=0.0)
     # 3 ms: the first box's other region is searched (within 4 ms); at 9 ms the second's is put off
-    assert asked == [(TRACKED, True), (TRACKED2, False)] and results == [TRACKED, TRACKED2] and put_off == 1
+    assert asked == [(TRACKED, True), (TRACKED2, False)] and results == [TRACKED, TRACKED, TRACKED2]
+    assert put_off == 1
     clock.t, asked[:] = 0.0, []
     _, put_off = s.run([TRACKED, TRACKED2], HINTS2, verify, start=0.0)
     # next frame: the box put off comes first and is searched within the budget; the other is put off
@@ -93,6 +95,44 @@ def test_a_spent_budget_puts_off_the_new_object_search_beside_a_tracked_object_o
         clock.t, asked[:] = 0.01, []
         _, put_off = s.run([TRACKED, TRACKED2], HINTS2, verify, start=0.0)
         assert asked == [(late, True), (TRACKED2 if late == TRACKED else TRACKED, False)] and put_off == 1
+
+
+def test_searches_past_the_budget_that_find_nothing_back_off() -> None:
+    clock = Clock(0.003)
+    s = VerifySchedule(1.0, clock)  # every frame is late by its first box
+    searched: list[int] = []
+
+    def beside(frame: int) -> object:
+        def verify(b: Box, may_search: object = None) -> list[Box]:
+            clock.t += clock.cost
+            assert callable(may_search)
+            if may_search():
+                searched.append(frame)  # searched beside the tracked object, in vain
+            return [b]
+        return verify
+
+    for frame in range(40):
+        clock.t = 0.0
+        _, put_off = s.run([TRACKED], HINTS, beside(frame), start=0.0)
+        assert put_off == (0 if searched and searched[-1] == frame else 1)
+    # put off in frame 0, then searched after waiting 0, 1, 2, 4, 8, 8, ... frames
+    assert searched == [1, 3, 6, 11, 20, 29, 38]
+
+    untracked: list[int] = []
+    now = [0]
+
+    def verify(b: Box, may_search: object = None) -> list[Box]:
+        clock.t += clock.cost
+        if b == SMALL:
+            untracked.append(now[0])
+        return [] if b == SMALL else [b]
+    for now[0] in range(20):
+        clock.t = 0.0
+        s.run([TRACKED, SMALL], HINTS, verify, start=0.0)
+    assert untracked == [0, 2, 5, 10, 19]  # the first untracked box: at once, then backing off
+    clock.t, now[0] = 0.0, 20
+    VerifySchedule(1.0, clock).run([TRACKED, SMALL], HINTS, verify, start=0.0)
+    assert untracked[-1] == 20  # a new schedule: no back-off
 
 
 def test_without_a_budget_nothing_asks_before_searching() -> None:
@@ -130,13 +170,19 @@ def test_a_late_frame_keeps_a_tracked_targets_recent_terms_and_works_out_new_or_
     clock.t = 0.005  # 5 ms into the step: late
     assert s.terms(1, 11, 0.0, work) is first and s.terms(1, 13, 0.0, work) is first  # 1 and 3 frames old
     assert work.calls == 1 and s.reused == 2
-    newer = s.terms(1, 14, 0.0, work)  # 4 frames old: worked out even though late
+    clock.t = 0.0055  # 4 frames old: the terms may end by 4 ms · 4/3 = 5.3 ms; 5.5 ms is too late
+    assert s.terms(1, 14, 0.0, work) is first and s.reused == 3
+    clock.t = 0.005  # 5 ms: in time
+    newer = s.terms(1, 14, 0.0, work)
     assert work.calls == 2 and newer != first
-    s.terms(2, 14, 0.0, work)  # a new track: always worked out
-    assert work.calls == 3
+    clock.t = 0.007  # 5 frames old: by 6.7 ms, kept; 6 frames old (twice max_age): always worked out
+    assert s.terms(1, 19, 0.0, work) is newer and work.calls == 2
+    assert s.terms(1, 20, 0.0, work) != newer and work.calls == 3
+    s.terms(2, 20, 0.0, work)  # a new track: always worked out
+    assert work.calls == 4
     clock.t = 0.001  # on time again: worked out afresh
-    s.terms(1, 15, 0.0, work)
-    assert work.calls == 4 and s.reused == 2
+    s.terms(1, 21, 0.0, work)
+    assert work.calls == 5 and s.reused == 4
 
 
 def test_sigma_terms_of_ended_tracks_are_forgotten() -> None:

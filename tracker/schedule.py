@@ -33,20 +33,80 @@ def _overlaps(a: Box, b: Box) -> bool:
     return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
 
 
+def _predictions_in(box: Box, hints: NDArray[np.float64] | None) -> int:
+    """How many predicted track positions (x, y) (raw left pixels; hints (N, 2+)) lie inside the box."""
+    return 0 if hints is None else sum(box[0] <= h[0] < box[2] and box[1] <= h[1] < box[3] for h in hints)
+
+
+@dataclass
+class _PutOff:
+    """A box put off to a later frame. strikes: its searches in a row made past the budget that found
+    nothing; wait: frames before the next such search may be made (its back-off)."""
+
+    box: Box
+    strikes: int = 0
+    wait: int = 0
+
+
+class _Frame:
+    """One frame's bookkeeping: the deadline, the boxes put off the frame before, and what this frame
+    puts off or searched past the budget in vain. A search past the budget is made at most once a frame
+    for untracked boxes and once for the regions beside tracked objects (`passed`), and only for a box
+    whose back-off has run out."""
+
+    def __init__(self, deadline: float, before: list[_PutOff]):
+        self.deadline = deadline
+        self.before = before
+        self.put_off: list[_PutOff] = []  # put off, or searched past the budget in vain
+        self.deferred: set[Box] = set()  # put off
+        self.passed = {"untracked": False, "beside": False}
+
+    def prior(self, box: Box) -> _PutOff | None:
+        return next((p for p in self.before if _overlaps(box, p.box)), None)
+
+    def may_pass(self, box: Box, kind: str, first_time_ok: bool) -> bool:
+        """Whether a box past the deadline is searched now (marking the frame's pass as used)."""
+        p = self.prior(box)
+        if self.passed[kind] or (p is None and not first_time_ok) or (p is not None and p.wait > 0):
+            return False
+        self.passed[kind] = True
+        return True
+
+    def put(self, box: Box) -> None:
+        p = self.prior(box)
+        self.put_off.append(_PutOff(box, p.strikes if p else 0, max(p.wait - 1, 0) if p else 0))
+        self.deferred.add(box)
+
+    def in_vain(self, box: Box) -> None:
+        """A search past the budget found nothing: the box waits 1, 2, 4, then MAX_WAIT frames before
+        the next one."""
+        p = self.prior(box)
+        strikes = (p.strikes if p else 0) + 1
+        self.put_off.append(_PutOff(box, strikes, min(2 ** (strikes - 1), VerifySchedule.MAX_WAIT)))
+
+
 class VerifySchedule:
-    """Orders and bounds a frame's box verifications. budget_ms None: no bound (evaluations, offline)."""
+    """Orders and bounds a frame's box verifications. budget_ms None: no bound (evaluations, offline).
+
+    Searches made past the budget (the first untracked box of a frame, or a region beside a tracked
+    object put off the frame before) that find nothing back off: the same place is searched past the
+    budget again after 1, 2, 4 and then every MAX_WAIT frames (0.27 s at 30 fps) until it finds
+    something or is searched within the budget. A lasting fruitless region (leaves, the ragged shadow of
+    a tracked object) so costs one search in 8 busy frames instead of one in 2."""
+
+    MAX_WAIT = 8
 
     def __init__(self, budget_ms: float | None = None, clock: Callable[[], float] = time.perf_counter):
         self.budget_ms = budget_ms
         self.clock = clock
-        self._put_off: tuple[Box, ...] = ()
+        self._put_off: list[_PutOff] = []
 
     def _order(self, boxes: Sequence[Box], held: list[bool]) -> list[int]:
         """Indices of boxes in the order to verify them: holding a prediction (held), put off last frame,
         then larger first (stable otherwise)."""
         def key(i: int) -> tuple[int, int, int]:
             b = boxes[i]
-            put_off = any(_overlaps(b, p) for p in self._put_off)
+            put_off = any(_overlaps(b, p.box) for p in self._put_off)
             return (0 if held[i] else 1, 0 if put_off else 1, -(b[2] - b[0]) * (b[3] - b[1]))
         return sorted(range(len(boxes)), key=key)
 
@@ -61,38 +121,41 @@ class VerifySchedule:
         if self.budget_ms is None:
             return [r for b in boxes for r in verify(b, None)], 0
         t0 = self.clock() if start is None else start
-        deadline = t0 + self.budget_ms * 1e-3
+        fr = _Frame(t0 + self.budget_ms * 1e-3, self._put_off)
         done: dict[int, list[T]] = {}
-        put_off: list[Box] = []
-        untracked, passed = 0, [False]
         held = [holds_prediction(b, hints) for b in boxes]
         for i in self._order(boxes, held):
             b = boxes[i]
-            if not held[i]:
-                if untracked and self.clock() > deadline:
-                    put_off.append(b)
-                    continue
-                untracked += 1
+            if held[i]:
+                forced = [False]
+                done[i] = verify(b, self._may_search(b, fr, forced))
+                if forced[0] and len(done[i]) <= _predictions_in(b, hints):
+                    fr.in_vain(b)
+            elif self.clock() <= fr.deadline:
+                fr.passed["untracked"] = True  # the first untracked box, at least, is verified every frame
                 done[i] = verify(b, None)
+            elif fr.may_pass(b, "untracked", True):
+                done[i] = verify(b, None)
+                if not done[i]:
+                    fr.in_vain(b)
             else:
-                done[i] = verify(b, self._may_search(b, deadline, put_off, passed))
-        self._put_off = tuple(dict.fromkeys(put_off))
-        return [r for i in range(len(boxes)) for r in done.get(i, [])], len(self._put_off)
+                fr.put(b)
+        self._put_off = fr.put_off
+        return [r for i in range(len(boxes)) for r in done.get(i, [])], len(fr.deferred)
 
-    def _may_search(self, box: Box, deadline: float, put_off: list[Box], passed: list[bool]
-                    ) -> Callable[[], bool]:
+    def _may_search(self, box: Box, fr: _Frame, forced: list[bool]) -> Callable[[], bool]:
         """Whether a region of a tracked box that holds no prediction (something beside the tracked
         object: a new object, or leaves) is searched now: while the budget lasts; once it is spent, only
-        where the box overlaps one put off the frame before, once a frame (passed[0]), so that what is
-        put off is searched within a frame or two even while tracked objects use up the budget. Else
-        the box is put off."""
+        where the box overlaps one put off the frame before whose back-off has run out, once a frame, so
+        that what is put off is searched within a frame or two even while tracked objects use up the
+        budget (forced[0] set: the caller judges whether it found anything). Else the box is put off."""
         def ask() -> bool:
-            if self.clock() <= deadline:
+            if self.clock() <= fr.deadline:
                 return True
-            if not passed[0] and any(_overlaps(box, p) for p in self._put_off):
-                passed[0] = True
+            if fr.may_pass(box, "beside", False):
+                forced[0] = True
                 return True
-            put_off.append(box)
+            fr.put(box)
             return False
         return ask
 
@@ -112,10 +175,13 @@ class SigmaSchedule:
     """Which targets have their SigmaTerms worked out afresh in a frame with a time budget.
 
     The terms cost 0.3 to 2.5 ms a target; they change slowly (the target's size, texture, what hides
-    it). With a budget, a tracked target whose terms were worked out within the last `max_age` frames
-    keeps them when working them out again would end after budget_ms of the frame's step (by what they
-    cost the last time); a new track, or terms older than that, are always worked out. budget_ms None:
-    always worked out (evaluations, offline)."""
+    it). With a budget, a tracked target keeps its terms when working them out again would end after
+    budget_ms of the frame's step (by what they cost the last time). Terms older than `max_age` frames
+    may end later, the more so the older they are: up to budget_ms · age / max_age; at twice max_age,
+    or for a new track, they are always worked out. So a target whose own verification takes the whole
+    budget every frame (a near person, while the mount turns) has its terms worked out once in 15 to 30
+    frames, in the least busy of those frames rather than in whichever comes 16th. budget_ms None: always
+    worked out (evaluations, offline)."""
 
     def __init__(self, budget_ms: float | None = None, max_age: int = 15,
                  clock: Callable[[], float] = time.perf_counter):
@@ -130,8 +196,9 @@ class SigmaSchedule:
         (clock seconds)."""
         kept = self._kept.get(track_id)
         now = self.clock()
-        if (self.budget_ms is not None and kept is not None and 0 <= index - kept[0] <= self.max_age
-                and (now - start) * 1e3 + kept[2] > self.budget_ms):
+        age = index - kept[0] if kept is not None else -1
+        if (self.budget_ms is not None and kept is not None and 0 <= age < 2 * self.max_age
+                and (now - start) * 1e3 + kept[2] > self.budget_ms * max(1.0, age / self.max_age)):
             self.reused += 1
             return kept[1]
         got = work()
