@@ -190,3 +190,24 @@ def test_parts_of_one_body_verified_from_different_boxes_are_joined() -> None:
     assert one.disparity == torso.disparity  # the larger part's
     assert len(join_parts([torso, _blob((105, 202, 155, 300), 30.0)], moments)) == 2  # another depth
     assert len(join_parts([torso, _blob((105, 230, 155, 300), 20.0)], moments)) == 2  # 30 px apart
+
+
+def test_the_search_about_a_tracks_prediction_is_bounded_by_how_far_its_disparity_can_move() -> None:
+    # f b = 600 px x 0.3 m = 180 px m; at 15 m/s and 30 fps a disparity d moves by up to d² / 360 px a frame
+    from tracker import verify
+    from tracker.detect import DetectorConfig
+
+    v = object.__new__(verify.Verifier)
+    v.rect, v.cfg = Rectifier(_ideal_rig()), DetectorConfig()
+    assert v.search_radius(7.0) == 1  # 26 m: 0.14 px a frame, doubled
+    assert v.search_radius(20.0) == 3  # 9 m: 1.1 px, doubled and rounded up
+    assert v.search_radius(60.0) == 4 and v.search_radius(None) == 4  # near, or a new object: at most 4
+    # a textured surface at 10 px; a track predicts 7 px: refining from 7 fails, and 10 lies beyond 7 ± 1
+    tex = _texture(5)
+    left = np.asarray(tex[:, 32:32 + W].clip(0, 255), np.uint8)
+    right = np.asarray(tex[:, 42:42 + W].clip(0, 255), np.uint8)  # right(x) = left(x + 10): disparity 10
+    frame = StereoFrame(0, left, right, 0.0, 0.0)
+    box, obj = (260, 180, 380, 300), np.ones((120, 120), bool)
+    assert v.match_object(frame, box, obj, 7.0, v.search_radius(7.0)) is None
+    fit = v.match_object(frame, box, obj, 7.0)  # the new-object radius, 4 px: the surface is found
+    assert fit is not None and abs(fit.disparity - 10.0) < 0.3

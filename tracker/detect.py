@@ -46,7 +46,9 @@ class DetectorConfig:
     needs this many stride cells above the threshold unless a track is predicted inside its box (a moving
     view samples the background's edges at new sub-pixel phases, which leaves isolated residuals; a new
     object must then cover about moving_min_cells · stride² pixels to be picked up). near_m: the nearest
-    range (m) of the background: it bounds the background's disparity search to f·b / near_m."""
+    range (m) of the background: it bounds the background's disparity search to f·b / near_m.
+    max_speed_mps: the fastest a tracked object's range changes (m/s): it bounds the search about the
+    track's predicted disparity (tracker.verify.Verifier.search_radius)."""
 
     epsilon: int = 12
     stride: int = 4
@@ -59,6 +61,7 @@ class DetectorConfig:
     max_disparity: int = 160
     moving_min_cells: int = 3
     near_m: float = 2.5
+    max_speed_mps: float = 15.0
 
     def __post_init__(self) -> None:
         if not 1 <= self.epsilon <= 254:

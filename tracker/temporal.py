@@ -220,7 +220,9 @@ class TemporalDetector:
             return None
         if texture_corr(key, b, obj) > cfg.max_texture_corr:
             return None  # the background's own texture, relit: a shadow or a local change of light
-        fine = self.verifier.match_object(frame, box, obj, nearest_hint(hints, obj, box))
+        hint = nearest_hint(hints, obj, box)
+        radius = self.verifier.search_radius(hint)  # about a track's prediction: how far it can move
+        fine = self.verifier.match_object(frame, box, obj, hint, radius)
         if fine is None:
             return None
         same = _same_surface(self.verifier.rect, frame, box, obj, fine.disparity, eps)
@@ -228,7 +230,7 @@ class TemporalDetector:
             return None
         if int(np.count_nonzero(same)) < 0.9 * int(np.count_nonzero(obj)):  # part of it was something else
             obj = same
-            fine = self.verifier.match_object(frame, box, obj, fine.disparity)
+            fine = self.verifier.match_object(frame, box, obj, fine.disparity, radius)
             if fine is None:
                 return None
         m8 = obj.view(np.uint8)

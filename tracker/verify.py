@@ -87,6 +87,7 @@ _MATCH_HALF_SLANT = (12, 8)  # the same when the larger ones match nowhere (slan
 # weighted ZNCC a region's match needs: a whole object scores 0.95-0.99; a sliver beside an occluder that
 # catches the occluder's edge scores lower and would give a wrong disparity
 _MIN_SCORE = 0.8
+_SEARCH_RADIUS = 4  # px about a disparity that refining from failed to match (Verifier.search_radius)
 _RING = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (9, 9))
 _NEAR = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
 
@@ -234,7 +235,7 @@ class Verifier:
                 bg, dev = model
                 obj, gain, changed = temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1],
                                                        dev[y0:y1, x0:x1], obj, either & free, cfg.epsilon)
-        fine = self.match_object(frame, box, obj, d0)
+        fine = self.match_object(frame, box, obj, d0, self.search_radius(d_hint))
         if fine is None:
             return None
         m8 = obj.view(np.uint8)
@@ -248,7 +249,18 @@ class Verifier:
         return Blob(box, obj, area, c_raw, np.array([sx / sa, sy / sa]), fine.disparity, fine.sigma, d_bg,
                     fine.score, gain), changed
 
-    def match_object(self, frame: StereoFrame, box: Box, obj: BoolA, d0: float | None) -> RegionMatch | None:
+    def search_radius(self, d_hint: float | None) -> int:
+        """How far (px) about a track's predicted disparity d the search goes when refining from it fails:
+        as far as its disparity can move in a frame at max_speed_mps, Δd = d ΔZ / Z = d² v / (f b fps)
+        (Z = f b / d), doubled, between 1 and 4 px; 4 about a new object's coarse disparity. A far target
+        (26 m: d 7 px, Δd 0.1 px) so cannot take a stronger peak 2 to 4 px away (a hedge behind a head)."""
+        if d_hint is None:
+            return _SEARCH_RADIUS
+        step = d_hint * d_hint * self.cfg.max_speed_mps / (self.rect.f * self.rect.b * self.cfg.fps)
+        return int(min(max(np.ceil(2.0 * step), 1), _SEARCH_RADIUS))
+
+    def match_object(self, frame: StereoFrame, box: Box, obj: BoolA, d0: float | None,
+                     radius: int = _SEARCH_RADIUS) -> RegionMatch | None:
         """The object's disparity from matching its own pixels (a search over the whole range first when
         no prior d0 is known). None without a match, or with one the image edge may have cut short (the
         right camera may not see it). A region whose depth varies (a walker's swinging limbs about its
@@ -261,7 +273,7 @@ class Verifier:
         for half in (_MATCH_HALF, _MATCH_HALF_SLANT):
             for part in row_thirds(obj):
                 strips = self._strips(frame, box, part, d0, half)
-                fine = None if strips is None else strips.match(part, d0, 4)
+                fine = None if strips is None else strips.match(part, d0, radius)
                 if fine is not None and strips is not None:
                     return None if strips.clipped and fine.disparity > strips.d_hi - 2.0 else fine
         return None
