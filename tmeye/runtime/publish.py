@@ -22,10 +22,12 @@ class Subscription(Generic[T]):
     """A bounded drop-oldest queue. `put` never blocks; `get(timeout)` waits in a consumer thread;
     `drain()` takes everything without waiting (asyncio consumers, after their notify)."""
 
-    def __init__(self, maxsize: int, notify: Callable[[], Any] | None = None, name: str = ""):
+    def __init__(self, maxsize: int, notify: Callable[[], Any] | None = None, name: str = "",
+                 first: bool = False):
         if maxsize < 1:
             raise ValueError(f"a subscription holds at least one item, got maxsize={maxsize}")
         self.name = name
+        self.first = first  # put and notified before the subscriptions without (Hub.subscribe)
         self.maxsize = maxsize
         self.notify = notify
         self.dropped = 0
@@ -73,27 +75,21 @@ class Hub(Generic[T]):
 
     def __init__(self) -> None:
         self._subs: list[Subscription[T]] = []  # those subscribed `first` ahead of the others
-        self._first: set[Subscription[T]] = set()
         self._lock = threading.Lock()
 
     def subscribe(self, maxsize: int = 4, notify: Callable[[], Any] | None = None,
                   name: str = "", first: bool = False) -> Subscription[T]:
         """A new subscription. first: put and notified before those without (a consumer someone waits on,
         such as a telemetry WebSocket, is woken before the H.264 encoder takes the GIL for the frame)."""
-        sub: Subscription[T] = Subscription(maxsize, notify, name)
+        sub: Subscription[T] = Subscription(maxsize, notify, name, first)
         with self._lock:
-            if first:
-                self._subs.insert(sum(1 for s in self._subs if s in self._first), sub)
-                self._first.add(sub)
-            else:
-                self._subs.append(sub)
+            self._subs.insert(sum(1 for s in self._subs if s.first) if first else len(self._subs), sub)
         return sub
 
     def unsubscribe(self, sub: Subscription[T]) -> None:
         with self._lock:
             if sub in self._subs:
                 self._subs.remove(sub)
-            self._first.discard(sub)
         sub.close()
 
     @property
@@ -120,6 +116,5 @@ class Hub(Generic[T]):
     def close(self) -> None:
         with self._lock:
             subs, self._subs = list(self._subs), []
-            self._first.clear()
         for sub in subs:
             sub.close()
