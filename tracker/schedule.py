@@ -10,7 +10,8 @@ the budget is spent is put off to the next frame, where it comes first: one box 
 is verified every frame, so a queue of put-off boxes drains even while tracked ones use up the budget.
 Inside a tracked box, the regions beside the tracked objects that hold no prediction are searched as new
 objects (the costliest verification: over the whole disparity range) under the same budget; once it is
-spent, one such box put off the frame before is searched a frame, the others put off again.
+spent, one such box put off the frame before is searched a frame, the others put off again. A search
+past the budget that finds nothing backs off (1, 2, 4, then MAX_WAIT frames before the next one there).
 Without a budget every box is verified, in the candidate stage's order, as before.
 """
 
