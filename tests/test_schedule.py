@@ -118,6 +118,23 @@ def test_searches_past_the_budget_that_find_nothing_back_off() -> None:
     # put off in frame 0, then searched after waiting 0, 1, 2, 4, 8, 8, ... frames
     assert searched == [1, 3, 6, 11, 20, 29, 38]
 
+    searched.clear()
+    s = VerifySchedule(1.0, clock)
+
+    def two_regions(frame: int) -> object:  # two fruitless regions beside the tracked object: the same
+        def verify(b: Box, may_search: object = None) -> list[Box]:
+            clock.t += clock.cost
+            assert callable(may_search)
+            searched.extend([frame] if may_search() else [])
+            searched.extend([frame] if may_search() else [])  # at most one search past the budget a frame
+            return [b]
+        return verify
+
+    for frame in range(12):
+        clock.t = 0.0
+        s.run([TRACKED], HINTS, two_regions(frame), start=0.0)
+    assert searched == [1, 3, 6, 11]
+
     untracked: list[int] = []
     now = [0]
 

@@ -58,7 +58,7 @@ class _Frame:
     def __init__(self, deadline: float, before: list[_PutOff]):
         self.deadline = deadline
         self.before = before
-        self.put_off: list[_PutOff] = []  # put off, or searched past the budget in vain
+        self.put_off: dict[Box, _PutOff] = {}  # put off, or searched past the budget in vain (that wins)
         self.deferred: set[Box] = set()  # put off
         self.passed = {"untracked": False, "beside": False}
 
@@ -75,7 +75,7 @@ class _Frame:
 
     def put(self, box: Box) -> None:
         p = self.prior(box)
-        self.put_off.append(_PutOff(box, p.strikes if p else 0, max(p.wait - 1, 0) if p else 0))
+        self.put_off.setdefault(box, _PutOff(box, p.strikes if p else 0, max(p.wait - 1, 0) if p else 0))
         self.deferred.add(box)
 
     def in_vain(self, box: Box) -> None:
@@ -83,7 +83,7 @@ class _Frame:
         the next one."""
         p = self.prior(box)
         strikes = (p.strikes if p else 0) + 1
-        self.put_off.append(_PutOff(box, strikes, min(2 ** (strikes - 1), VerifySchedule.MAX_WAIT)))
+        self.put_off[box] = _PutOff(box, strikes, min(2 ** (strikes - 1), VerifySchedule.MAX_WAIT))
 
 
 class VerifySchedule:
@@ -141,7 +141,7 @@ class VerifySchedule:
                     fr.in_vain(b)
             else:
                 fr.put(b)
-        self._put_off = fr.put_off
+        self._put_off = list(fr.put_off.values())
         return [r for i in range(len(boxes)) for r in done.get(i, [])], len(fr.deferred)
 
     def _may_search(self, box: Box, fr: _Frame, forced: list[bool]) -> Callable[[], bool]:
