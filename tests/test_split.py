@@ -211,3 +211,26 @@ def test_the_search_about_a_tracks_prediction_is_bounded_by_how_far_its_disparit
     assert v.match_object(frame, box, obj, 7.0, v.search_radius(7.0)) is None
     fit = v.match_object(frame, box, obj, 7.0)  # the new-object radius, 4 px: the surface is found
     assert fit is not None and abs(fit.disparity - 10.0) < 0.3
+
+
+def test_the_temporal_outlines_gain_leaves_out_an_object_found_before_at_another_depth() -> None:
+    # the background B and the frame Γ alike (no change of light), but for a bright object taken first on
+    # the right and a darker one on the left: the gain Σ Γ / Σ B over the ring must not count the first
+    from tracker.verify import temporal_outline
+
+    rng = np.random.default_rng(3)
+    bg = np.asarray(cv2.GaussianBlur(rng.uniform(60, 120, (80, 160)).astype(np.float32), (0, 0), 1.0), np.float32)
+    key = bg.copy()
+    key[20:60, 100:150] = 240.0  # the object found first
+    key[30:50, 20:40] += 30.0  # the object outlined now
+    region = np.zeros(bg.shape, bool)
+    region[28:52, 16:44] = True  # its left-key region (the object and a shadow strip on the left)
+    dev = np.full(bg.shape, 1.0, np.float32)
+    first = np.zeros(bg.shape, bool)
+    first[18:62, 98:152] = True
+    none = np.zeros(bg.shape, bool)
+    obj_all, g_all, _ = temporal_outline(key.astype(np.uint8), bg, dev, none, region, 12)
+    obj, g, _ = temporal_outline(key.astype(np.uint8), bg, dev, none, region, 12, first)
+    assert g_all > 1.2 and abs(g - 1.0) < 0.02
+    assert obj_all[region].all()  # at the wrong gain the whole region "changed" (and its rim)
+    assert int(obj.sum()) == 400 and obj[30:50, 20:40].all()  # at the right one, the object alone

@@ -22,7 +22,7 @@ from tracker.disparity_sigma import part_disparities
 from tracker.frames import StereoFrame
 from tracker.rectify import Rectifier
 from tracker.regions import background_disparity, hints_around, mask_centroid, nearest_hint, row_thirds
-from tracker.split import join, own_pixels, same_body
+from tracker.split import MIN_GAP_PX, MIN_GAP_REL, join, own_pixels, same_body
 from tracker.stereo import RegionMatch, match_region, refine_region
 
 U8 = NDArray[np.uint8]
@@ -93,20 +93,25 @@ _NEAR = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
 
 
 def temporal_outline(key: U8, bg: NDArray[np.float32], dev: NDArray[np.float32], core: BoolA,
-                      region: BoolA, eps: int) -> tuple[BoolA, float, BoolA]:
+                      region: BoolA, eps: int, taken: BoolA | None = None) -> tuple[BoolA, float, BoolA]:
     """The object's exact outline from the temporal model, inside a stereo region.
 
     core: pixels both keys agree are the object (left-key ∩ warped right-key mask: no occlusion shadow,
     but holes where the object overlaps its own shadow); region: where the object may be (the keys'
     union, or the left-key mask: the object and its shadow). The global gain g is Σ Γ / Σ B on the box's
-    ring outside the region; a pixel is the object if |Γ - g B| > ε in `core`, or > ε + 3 D elsewhere in
+    ring outside the region, less the pixels `taken` by objects found before in the box (a bright disc
+    beside a second object made g 1.47 where the light had not changed); a pixel is the object if
+    |Γ - g B| > ε in `core`, or > ε + 3 D elsewhere in
     `region` or a two-pixel rim, where D is the background's own mean deviation: a shadow falls on
     unchanged background (|Γ - g B| small) unless the background moves (foliage, large D).
     Returns the mask, g (1.0 when the ring is too small) and the box's pixels that changed at the strict
     threshold."""
     grown = cv2.dilate((region | core).astype(np.uint8), _NEAR) > 0
     band = grown & ~core
-    ring = ((cv2.dilate(grown.view(np.uint8), _RING) == 0) & (bg > 8.0)).view(np.uint8)
+    ring = (cv2.dilate(grown.view(np.uint8), _RING) == 0) & (bg > 8.0)
+    if taken is not None:
+        ring &= ~taken
+    ring = ring.view(np.uint8)
     g = 1.0
     if cv2.countNonZero(ring) >= 20:
         g = cv2.mean(key, mask=ring)[0] / cv2.mean(bg, mask=ring)[0]  # Σ Γ / Σ B over the ring
@@ -140,6 +145,19 @@ def _taken(blob: Blob, changed: BoolA | None) -> BoolA:
     if changed is not None:
         shadow[changed] = 0
     return np.asarray(cv2.dilate(m8 | shadow, _TAKEN) > 0)
+
+
+def _elsewhere(found: list[Blob], d: float) -> BoolA | None:
+    """The pixels (grown by two) of the objects found before in a box at another depth than a region at
+    disparity d (px; by the rival gap of tracker.split), or None: not the region's background, left out
+    of the temporal outline's gain; parts of one body (a head past the neck's gap) are left in."""
+    far = [b for b in found if abs(b.disparity - d) >= max(MIN_GAP_PX, MIN_GAP_REL * d)]
+    if not far:
+        return None
+    m8 = np.zeros(far[0].mask.shape, np.uint8)
+    for b in far:
+        m8 |= b.mask.view(np.uint8)
+    return np.asarray(cv2.dilate(m8, _TAKEN) > 0)
 
 
 class Verifier:
@@ -177,7 +195,7 @@ class Verifier:
             around = hints_around(hints, m_left, box)
             new_later = hint is None and may_search is not None and not may_search()
             got = None if new_later or self._too_small_to_be_new(n_left, hint) else self._verify_region(
-                frame, box, cm, m_left, hint, free, around)
+                frame, box, cm, m_left, hint, free, around, found)
             if got is None:
                 m_raw = m_raw & ~m_left  # not an object: try what else the box holds
                 continue
@@ -204,12 +222,13 @@ class Verifier:
         return self.sub.moving and hint is None and area < cfg.moving_min_cells * cfg.stride * cfg.stride
 
     def _verify_region(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap, m_left: BoolA,
-                       d_hint: float | None, free: BoolA, around: list[float] | None = None
-                       ) -> tuple[Blob, BoolA | None] | None:
+                       d_hint: float | None, free: BoolA, around: list[float] | None = None,
+                       found: list[Blob] | None = None) -> tuple[Blob, BoolA | None] | None:
         """Verify one connected region of the left-key mask inside a box. Returns the blob and, with the
         cameras still, the box's pixels unlike the temporal background (|Γ - g B| > ε + 3 g D).
         around: the predicted disparities of the tracks about the region (regions.hints_around); with more
-        than one, a tracked object's outline keeps only its pixels that match best at its own (tracker.split)."""
+        than one, a tracked object's outline keeps only its pixels that match best at its own (tracker.split).
+        found: the objects found before in the box (those at another depth stay out of the outline's gain)."""
         cfg = self.cfg
         around = around or []
         x0, y0, x1, y1 = box
@@ -221,7 +240,7 @@ class Verifier:
             bg, dev = model
             obj, gain, changed = temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1],
                                                    dev[y0:y1, x0:x1], np.zeros_like(m_left), m_left & free,
-                                                   cfg.epsilon)
+                                                   cfg.epsilon, _elsewhere(found or [], d_hint))
             if len(around) > 1:  # other tracks predicted about the region: keep the pixels at this one's d
                 obj = own_pixels(self.rect, frame, box, obj, d_hint, around, cfg.min_area_px)
             d0 = d_hint
@@ -234,7 +253,8 @@ class Verifier:
             if model is not None:  # cameras still: the temporal model draws the exact outline
                 bg, dev = model
                 obj, gain, changed = temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1],
-                                                       dev[y0:y1, x0:x1], obj, either & free, cfg.epsilon)
+                                                       dev[y0:y1, x0:x1], obj, either & free, cfg.epsilon,
+                                                       _elsewhere(found or [], d0))
         fine = self.match_object(frame, box, obj, d0, self.search_radius(d_hint))
         if fine is None:
             return None
