@@ -216,7 +216,7 @@ def test_the_search_about_a_tracks_prediction_is_bounded_by_how_far_its_disparit
 def test_the_temporal_outlines_gain_leaves_out_an_object_found_before_at_another_depth() -> None:
     # the background B and the frame Γ alike (no change of light), but for a bright object taken first on
     # the right and a darker one on the left: the gain Σ Γ / Σ B over the ring must not count the first
-    from tracker.verify import temporal_outline
+    from tracker.masks import temporal_outline
 
     rng = np.random.default_rng(3)
     bg = np.asarray(cv2.GaussianBlur(rng.uniform(60, 120, (80, 160)).astype(np.float32), (0, 0), 1.0), np.float32)

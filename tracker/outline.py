@@ -1,7 +1,7 @@
 """How far off the centroid of eq. (10) may lie because its outline is drawn by warping (issue 12 item 1).
 
 While the cameras are still, the left temporal model draws a tracked object's outline pixel by pixel against
-the background it has learnt (tracker.verify.temporal_outline). While they move there is no such model and
+the background it has learnt (tracker.masks.temporal_outline). While they move there is no such model and
 the outline is the stereo verification's (eq. 9 both ways, the right image warped onto the left through the
 background's disparity and again at the object's): each pixel of its edge is in or out by the warp's
 interpolation, the background disparity's error and the threshold ε against the sensor noise. An edge pixel

@@ -13,7 +13,7 @@ temporal model (background B and mean deviation D per pixel, at gain 1; tracker.
    is larger than those near their background it touches replaces them (the stereo residual of an
    object near its background shows only parts of it).
 2. Verification of each group at full resolution: the outline from the temporal model at the ring gain
-   (tracker.verify.temporal_outline); a region whose texture is the background's own relit (zero-mean
+   (tracker.masks.temporal_outline); a region whose texture is the background's own relit (zero-mean
    normalised correlation of Γ with B over it above `max_texture_corr`: a shadow, a local change of
    light) is dropped; the range comes from matching the region itself between the two cameras
    (tracker.stereo through the verifier's strips) and must not lie behind the known background by more
@@ -32,9 +32,10 @@ from numpy.typing import NDArray
 
 from tracker.detect import Box, StereoSubtractor
 from tracker.frames import StereoFrame
+from tracker.masks import largest_region, temporal_outline
 from tracker.rectify import Rectifier
 from tracker.regions import background_disparity, mask_centroid, nearest_hint
-from tracker.verify import Blob, Verifier, largest_region, temporal_outline
+from tracker.verify import Blob, Verifier
 
 F32 = NDArray[np.float32]
 F64 = NDArray[np.float64]

@@ -20,6 +20,7 @@ from tracker.bgdepth import CorrespondenceMap
 from tracker.detect import Box, StereoSubtractor
 from tracker.disparity_sigma import part_disparities
 from tracker.frames import StereoFrame
+from tracker.masks import NEAR, key_mask, largest_component, temporal_outline
 from tracker.rectify import Rectifier
 from tracker.regions import background_disparity, hints_around, mask_centroid, nearest_hint, row_thirds
 from tracker.split import MIN_GAP_PX, MIN_GAP_REL, join, own_pixels, same_body
@@ -48,39 +49,6 @@ class Blob:
     gain: float = 1.0
 
 
-def _key_mask(key: U8, other: U8, mx: NDArray[np.float32], my: NDArray[np.float32], valid: BoolA,
-              eps: int, floor: U8 | None) -> BoolA:
-    """eq. (9) for the pixels of a box: |Γ - Θ(x', y')| > ε (+ the temporal floor B)."""
-    ref = cv2.remap(other, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-    resid = cv2.absdiff(key, ref)
-    if floor is not None:
-        resid = cv2.subtract(resid, floor)
-    return np.asarray((resid > eps) & valid)
-
-
-_CLOSE = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
-
-
-def _largest(mask: BoolA, close: bool = False, every: bool = False) -> BoolA:
-    """The largest 8-connected component (or with `every`, all of them) with holes filled; with `close`,
-    narrow channels into the holes are sealed first (a morphological closing), so those are filled too."""
-    m8 = mask.astype(np.uint8)
-    if close:
-        m8 = np.asarray(cv2.morphologyEx(m8, cv2.MORPH_CLOSE, _CLOSE), np.uint8) | m8
-    contours, _ = cv2.findContours(m8, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
-    if not contours:
-        return np.zeros_like(mask)
-    keep = list(contours) if every else [max(contours, key=cv2.contourArea)]
-    out = np.zeros(mask.shape, np.uint8)
-    cv2.drawContours(out, keep, -1, 1, thickness=cv2.FILLED)
-    return out.astype(bool)
-
-
-def largest_region(mask: BoolA) -> BoolA:
-    """The largest 8-connected component of a mask, holes filled."""
-    return _largest(mask)
-
-
 _CORE = np.ones((3, 3), np.uint8)
 _MATCH_HALF = (24, 16)  # half width and height (px) of the largest window matched
 _MATCH_HALF_SLANT = (12, 8)  # the same when the larger ones match nowhere (slanted faces, near)
@@ -88,49 +56,6 @@ _MATCH_HALF_SLANT = (12, 8)  # the same when the larger ones match nowhere (slan
 # catches the occluder's edge scores lower and would give a wrong disparity
 _MIN_SCORE = 0.8
 _SEARCH_RADIUS = 4  # px about a disparity that refining from failed to match (Verifier.search_radius)
-_RING = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (9, 9))
-_NEAR = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
-
-
-def temporal_outline(key: U8, bg: NDArray[np.float32], dev: NDArray[np.float32], core: BoolA,
-                      region: BoolA, eps: int, taken: BoolA | None = None) -> tuple[BoolA, float, BoolA]:
-    """The object's exact outline from the temporal model, inside a stereo region.
-
-    core: pixels both keys agree are the object (left-key ∩ warped right-key mask: no occlusion shadow,
-    but holes where the object overlaps its own shadow); region: where the object may be (the keys'
-    union, or the left-key mask: the object and its shadow). The global gain g is Σ Γ / Σ B on the box's
-    ring outside the region, less the pixels `taken` by objects found before in the box (a bright disc
-    beside a second object made g 1.47 where the light had not changed); a pixel is the object if
-    |Γ - g B| > ε in `core`, or > ε + 3 D elsewhere in
-    `region` or a two-pixel rim, where D is the background's own mean deviation: a shadow falls on
-    unchanged background (|Γ - g B| small) unless the background moves (foliage, large D).
-    Returns the mask, g (1.0 when the ring is too small) and the box's pixels that changed at the strict
-    threshold."""
-    grown = cv2.dilate((region | core).astype(np.uint8), _NEAR) > 0
-    band = grown & ~core
-    ring = (cv2.dilate(grown.view(np.uint8), _RING) == 0) & (bg > 8.0)
-    if taken is not None:
-        ring &= ~taken
-    ring = ring.view(np.uint8)
-    g = 1.0
-    if cv2.countNonZero(ring) >= 20:
-        g = cv2.mean(key, mask=ring)[0] / cv2.mean(bg, mask=ring)[0]  # Σ Γ / Σ B over the ring
-    diff = _change(key, bg, g)
-    changed = diff > _strict_limit(dev, g, eps)
-    inside = core & (diff > eps)
-    return _largest(inside | (band & changed), close=True), g, changed
-
-
-def _change(key: U8, bg: NDArray[np.float32], g: float) -> NDArray[np.float32]:
-    """|Γ - g B|: how far each pixel is from the temporal background at global gain g."""
-    return np.asarray(np.abs(key.astype(np.float32) - np.float32(g) * bg), np.float32)
-
-
-def _strict_limit(dev: NDArray[np.float32], g: float, eps: int) -> NDArray[np.float32]:
-    """ε + 3 g D: the change a pixel must exceed where the background itself moves by D on average."""
-    return np.asarray(np.float32(eps) + np.float32(3.0 * g) * dev, np.float32)
-
-
 _TAKEN = np.ones((5, 5), np.uint8)
 
 
@@ -178,7 +103,7 @@ class Verifier:
         cfg = self.cfg
         x0, y0, x1, y1 = box
         cm = self.sub.correspondence(0, frame.gimbal, box)
-        m_raw = _key_mask(frame.left[y0:y1, x0:x1], frame.right, cm.map_x, cm.map_y, cm.valid,
+        m_raw = key_mask(frame.left[y0:y1, x0:x1], frame.right, cm.map_x, cm.map_y, cm.valid,
                           cfg.epsilon, np.maximum(self.sub.floor_at(box), cm.floor))
         found: list[Blob] = []
         free = np.ones(m_raw.shape, bool)  # pixels no object found so far explains
@@ -187,7 +112,7 @@ class Verifier:
             if int(np.count_nonzero(m_raw)) < min_area:
                 break
             # where the object overlaps its own ghost, Γ and Θ both show the object and may agree: holes
-            m_left = _largest(m_raw, close=True)
+            m_left = largest_component(m_raw, close=True)
             n_left = int(np.count_nonzero(m_left))
             if n_left < min_area:
                 break
@@ -318,11 +243,11 @@ class Verifier:
         if d_hint is None:
             return None
         m_right = self._right_key_at(frame, box, d_hint)
-        obj = _largest(m_left & m_right)
+        obj = largest_component(m_left & m_right)
         if int(np.count_nonzero(obj)) < self.cfg.min_area_px:
             return None
         # the rest of the object: where the right key sees it at this disparity, or next to the solid
-        near = cv2.dilate(obj.astype(np.uint8), _NEAR) > 0
+        near = cv2.dilate(obj.astype(np.uint8), NEAR) > 0
         return obj, m_right | (m_left & near), d_hint
 
     def _coarse_disparity(self, frame: StereoFrame, box: Box, region: BoolA, d0: float | None) -> float | None:
@@ -390,7 +315,7 @@ class Verifier:
         rbox = (bx0, by0, bx1, by1)
         cm = self.sub.correspondence(1, frame.gimbal, rbox)
         floor = cm.floor
-        m_right = _largest(_key_mask(frame.right[by0:by1, bx0:bx1], frame.left, cm.map_x, cm.map_y,
+        m_right = largest_component(key_mask(frame.right[by0:by1, bx0:bx1], frame.left, cm.map_x, cm.map_y,
                                      cm.valid, self.cfg.epsilon, floor), close=True, every=True).astype(np.float32)
         sampled = cv2.remap(m_right, (ur - bx0).astype(np.float32), (vr - by0).astype(np.float32),
                             cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)

@@ -1,0 +1,88 @@
+"""Masks of a candidate box (paper eq. 9): the key-image mask against the other camera's warped image, its
+largest region, and the object's outline drawn from the temporal background (tracker.verify builds on
+them; tracker.temporal draws outlines with the same rule)."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+U8 = NDArray[np.uint8]
+BoolA = NDArray[np.bool_]
+
+
+def key_mask(key: U8, other: U8, mx: NDArray[np.float32], my: NDArray[np.float32], valid: BoolA,
+             eps: int, floor: U8 | None) -> BoolA:
+    """eq. (9) for the pixels of a box: |Γ - Θ(x', y')| > ε (+ the temporal floor B)."""
+    ref = cv2.remap(other, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    resid = cv2.absdiff(key, ref)
+    if floor is not None:
+        resid = cv2.subtract(resid, floor)
+    return np.asarray((resid > eps) & valid)
+
+
+CLOSE = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
+
+
+def largest_component(mask: BoolA, close: bool = False, every: bool = False) -> BoolA:
+    """The largest 8-connected component (or with `every`, all of them) with holes filled; with `close`,
+    narrow channels into the holes are sealed first (a morphological closing), so those are filled too."""
+    m8 = mask.astype(np.uint8)
+    if close:
+        m8 = np.asarray(cv2.morphologyEx(m8, cv2.MORPH_CLOSE, CLOSE), np.uint8) | m8
+    contours, _ = cv2.findContours(m8, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    if not contours:
+        return np.zeros_like(mask)
+    keep = list(contours) if every else [max(contours, key=cv2.contourArea)]
+    out = np.zeros(mask.shape, np.uint8)
+    cv2.drawContours(out, keep, -1, 1, thickness=cv2.FILLED)
+    return out.astype(bool)
+
+
+def largest_region(mask: BoolA) -> BoolA:
+    """The largest 8-connected component of a mask, holes filled."""
+    return largest_component(mask)
+
+
+RING = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (9, 9))
+NEAR = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
+
+
+def temporal_outline(key: U8, bg: NDArray[np.float32], dev: NDArray[np.float32], core: BoolA,
+                     region: BoolA, eps: int, taken: BoolA | None = None) -> tuple[BoolA, float, BoolA]:
+    """The object's exact outline from the temporal model, inside a stereo region.
+
+    core: pixels both keys agree are the object (left-key ∩ warped right-key mask: no occlusion shadow,
+    but holes where the object overlaps its own shadow); region: where the object may be (the keys'
+    union, or the left-key mask: the object and its shadow). The global gain g is Σ Γ / Σ B on the box's
+    ring outside the region, less the pixels `taken` by objects found before in the box (a bright disc
+    beside a second object made g 1.47 where the light had not changed); a pixel is the object if
+    |Γ - g B| > ε in `core`, or > ε + 3 D elsewhere in
+    `region` or a two-pixel rim, where D is the background's own mean deviation: a shadow falls on
+    unchanged background (|Γ - g B| small) unless the background moves (foliage, large D).
+    Returns the mask, g (1.0 when the ring is too small) and the box's pixels that changed at the strict
+    threshold."""
+    grown = cv2.dilate((region | core).astype(np.uint8), NEAR) > 0
+    band = grown & ~core
+    ring = (cv2.dilate(grown.view(np.uint8), RING) == 0) & (bg > 8.0)
+    if taken is not None:
+        ring &= ~taken
+    ring = ring.view(np.uint8)
+    g = 1.0
+    if cv2.countNonZero(ring) >= 20:
+        g = cv2.mean(key, mask=ring)[0] / cv2.mean(bg, mask=ring)[0]  # Σ Γ / Σ B over the ring
+    diff = change(key, bg, g)
+    changed = diff > strict_limit(dev, g, eps)
+    inside = core & (diff > eps)
+    return largest_component(inside | (band & changed), close=True), g, changed
+
+
+def change(key: U8, bg: NDArray[np.float32], g: float) -> NDArray[np.float32]:
+    """|Γ - g B|: how far each pixel is from the temporal background at global gain g."""
+    return np.asarray(np.abs(key.astype(np.float32) - np.float32(g) * bg), np.float32)
+
+
+def strict_limit(dev: NDArray[np.float32], g: float, eps: int) -> NDArray[np.float32]:
+    """ε + 3 g D: the change a pixel must exceed where the background itself moves by D on average."""
+    return np.asarray(np.float32(eps) + np.float32(3.0 * g) * dev, np.float32)
