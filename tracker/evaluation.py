@@ -13,7 +13,7 @@ from numpy.typing import NDArray
 from tracker.detect import DetectorConfig
 from tracker.frames import GimbalState
 from tracker.geometry import StereoRig
-from tracker.localize import spherical
+from tracker.localize import SolidPrior, spherical
 from tracker.pipeline import Detection, FrameResult, Pipeline
 from tracker.sim.render import FrameTruth, TargetTruth
 from tracker.sim.scenarios import Scenario, SimRig, get_scenario
@@ -209,7 +209,7 @@ def run_scenario(name: str | Scenario, frames: int | None = None, seed: int = 0,
     if scenario.closed_loop:
         raise ValueError(f"scenario {name!r} is closed-loop: run it with the servo evaluation")
     sim = SimRig(scenario, seed=seed)
-    pipe = Pipeline(rig or sim.rig, detector)
+    pipe = Pipeline(rig or sim.rig, detector, solid=SolidPrior() if scenario.bodies else None)
     for g in survey_poses(scenario):
         pipe.learn_background(sim.background(g))
     n = min(frames or scenario.frames, scenario.frames)

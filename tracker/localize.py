@@ -64,19 +64,38 @@ class Localization:
     sigma_phi: float
 
 
+@dataclass(frozen=True)
+class SolidPrior:
+    """What is known of a solid target's depth D behind the face the cameras see (issue 12 item 1): the
+    disparity, and so eq. (2), measures that face, while the target's centre lies D/2 behind it along the
+    line of sight. D is unseen; it is taken as ρ times the target's smaller seen extent (width or height,
+    m), ρ = `ratio` ± `ratio_sigma` (1-σ). The centre is then placed ρ/2 · extent behind the measured point
+    and its range's variance grows by (ratio_sigma/2 · extent)². The default, ρ = 0.5 ± 0.3, covers the
+    simulator's bodies: a person about 0.3 m deep and 0.6 m wide (ρ 0.5), a ball (ρ 1), a car side-on
+    (1.8 m deep, 1.4 m high: ρ 1.3) at 2σ. Flat targets (a board facing the cameras) have ρ = 0: no
+    prior (None)."""
+
+    ratio: float = 0.5
+    ratio_sigma: float = 0.3
+
+
 class Localizer:
     """Rectified centroid + disparity -> 3-D point and spherical coordinates with uncertainties: the image
-    noise of the centroid and of the disparity, and the calibration's own (the rig's `sigma`)."""
+    noise of the centroid and of the disparity, the calibration's own (the rig's `sigma`) and, with a
+    SolidPrior, a solid target's unseen depth."""
 
-    def __init__(self, rect: Rectifier, origin: F64 | None = None, centroid_sigma_px: float = 0.05):
+    def __init__(self, rect: Rectifier, origin: F64 | None = None, centroid_sigma_px: float = 0.05,
+                 solid: SolidPrior | None = None):
         self.rect = rect
         self.origin = np.zeros(3) if origin is None else np.asarray(origin, float)
         self.centroid_sigma_px = centroid_sigma_px
+        self.solid = solid
 
     def locate(self, centroid_rect: F64, disparity: float, disparity_sigma: float, area: int,
-               gimbal: GimbalState | None, extra_px: tuple[float, float] = (0.0, 0.0)) -> Localization:
+               gimbal: GimbalState | None, extra_px: tuple[float, float] = (0.0, 0.0),
+               extent_px: tuple[float, float] | None = None) -> Localization:
         """extra_px: the centroid's further 1-σ (px) along x and y, where the target is seen only in part
-        (tracker.visibility)."""
+        (tracker.visibility). extent_px: the target's seen width and height (px), for the SolidPrior."""
         x, y = float(centroid_rect[0]), float(centroid_rect[1])
         X_rig = self.rect.rect_to_rig(x, y, disparity)  # eq. (2)
         J = self.rect.rig_to_rect_jacobian(x, y, disparity)
@@ -86,6 +105,8 @@ class Localizer:
         S = np.diag([s_c**2 + s_cx**2 + extra_px[0] ** 2, s_c**2 + s_cy**2 + extra_px[1] ** 2,
                      max(disparity_sigma, 0.02) ** 2 + s_dcal**2])
         cov_rig = J @ S @ J.T + cal.scale_rel**2 * np.outer(X_rig, X_rig)  # f·b off by ε: X -> (1 + ε) X
+        if self.solid is not None and extent_px is not None:
+            X_rig, cov_rig = self._behind_face(X_rig, cov_rig, min(extent_px))
         g = gimbal or GimbalState()
         R_wr = gimbal_rotation(g.pan_deg, g.tilt_deg)
         X_w = R_wr @ X_rig
@@ -96,3 +117,16 @@ class Localizer:
         cs = Js @ cov_w @ Js.T
         sr, st, sp = (float(np.sqrt(max(cs[i, i], 0.0))) for i in range(3))
         return Localization(X_rig, X_w, cov_w, r, th, ph, sr, st, sp)
+
+    def _behind_face(self, X_rig: F64, cov_rig: F64, extent_px: float) -> tuple[F64, F64]:
+        """A solid target's centre: the measured face point X_rig (3,) moved ρ/2 · e behind along the
+        ray from the midpoint of the lens centres, e = extent_px · Z / f (m) its smaller seen extent; the variance
+        (σ_ρ/2 · e)² added along that ray (SolidPrior)."""
+        assert self.solid is not None
+        c = 0.5 * (self.rect.rig.left.c + self.rect.rig.right.c)
+        ray = X_rig - c
+        dist = float(np.linalg.norm(ray))
+        u = ray / dist
+        e = extent_px * float(X_rig[2]) / self.rect.f  # metres
+        half, s_half = 0.5 * self.solid.ratio * e, 0.5 * self.solid.ratio_sigma * e
+        return np.asarray(X_rig + half * u), np.asarray(cov_rig + s_half**2 * np.outer(u, u))

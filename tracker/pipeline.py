@@ -22,7 +22,7 @@ from tracker.disparity_sigma import scatter_sigma
 from tracker.egomotion import PoseCompensation
 from tracker.frames import StereoFrame
 from tracker.geometry import StereoRig
-from tracker.localize import Localization, Localizer
+from tracker.localize import Localization, Localizer, SolidPrior
 from tracker.outline import OutlineConfig, warped_outline_sigma_px
 from tracker.rectify import Rectifier
 from tracker.schedule import SigmaSchedule, SigmaTerms, VerifySchedule
@@ -81,21 +81,23 @@ class Pipeline:
     def __init__(self, rig: StereoRig, detector: DetectorConfig | None = None,
                  tracker: TrackerConfig | None = None, origin: F64 | None = None,
                  temporal: TemporalConfig | None = None, verify_budget_ms: float | None = None,
-                 sigma_budget_ms: float | None = None):
+                 sigma_budget_ms: float | None = None, solid: SolidPrior | None = None):
         """verify_budget_ms: in real time, candidate boxes that hold no track's prediction, and regions
         beside a tracked object that hold none, are verified only while the frame's step is younger than
         this (ms); the others wait for the next frame (tracker.schedule.VerifySchedule; None: all are
         verified, as offline evaluation needs for repeatable results). sigma_budget_ms: in real time, a
         tracked target's costly 1-σ terms are worked out afresh only when they would end within this many
         ms of the step's start, else taken from a recent frame (tracker.schedule.SigmaSchedule; None:
-        every frame)."""
+        every frame). solid: what is known of solid targets' unseen depth (tracker.localize.SolidPrior;
+        None: flat targets, the range is the seen face's)."""
         self.rig = rig
         self.rect = Rectifier(rig)
         self.bg = BackgroundDepth(self.rect, near_m=(detector or DetectorConfig()).near_m)
         self.subtractor = StereoSubtractor(self.bg, detector)
         self.verifier = Verifier(self.subtractor, self.rect)
         self.temporal = TemporalDetector(self.subtractor, self.verifier, temporal)
-        self.localizer = Localizer(self.rect, origin, centroid_sigma_px=0.0)  # the outline's own: _centroid_extra
+        # centroid σ 0: the outline's own is worked out in _centroid_extra
+        self.localizer = Localizer(self.rect, origin, centroid_sigma_px=0.0, solid=solid)
         self.tracker = MultiTracker(tracker)
         self.ego = PoseCompensation(rig.left)
         self.schedule = VerifySchedule(verify_budget_ms)
@@ -189,11 +191,11 @@ class Pipeline:
         frame, a piece lost or gained at the outline's top or bottom (tracker.segmentation.HeightHistory)."""
         terms = self.sigma_schedule.terms(track_id, frame.index, start, lambda: SigmaTerms(
             self._disparity_sigma(frame, b), self._centroid_extra(frame, b, blobs)))
-        jump = self.heights.sigma_px(track_id, frame.index, float(cv2.boundingRect(b.mask.view(np.uint8))[3]),
-                                     b.disparity)
+        _, _, w, h = cv2.boundingRect(b.mask.view(np.uint8))
+        jump = self.heights.sigma_px(track_id, frame.index, float(h), b.disparity)
         cx, cy = terms.centroid_px
         return self.localizer.locate(b.centroid_rect, b.disparity, max(b.disparity_sigma, terms.disparity_px),
-                                     b.area, frame.gimbal, (cx, float(np.hypot(cy, jump))))
+                                     b.area, frame.gimbal, (cx, float(np.hypot(cy, jump))), (float(w), float(h)))
 
     def _disparity_sigma(self, frame: StereoFrame, b: Blob) -> float:
         """The scatter of the disparities of the blob's parts (px; tracker.disparity_sigma: correlated
