@@ -110,9 +110,14 @@ class _PoseMaps:
     full: dict[int, _LazyMap] = field(default_factory=dict)
 
 
+def predictions_in(box: Box, hints: NDArray[np.float64] | None) -> int:
+    """How many predicted track positions (x, y) (raw left pixels; hints (N, 2+)) lie inside the box."""
+    return 0 if hints is None else sum(box[0] <= h[0] < box[2] and box[1] <= h[1] < box[3] for h in hints)
+
+
 def holds_prediction(box: Box, hints: NDArray[np.float64] | None) -> bool:
-    """Whether a predicted track position (x, y) (raw left pixels; hints (N, 2+)) lies inside the box."""
-    return hints is not None and any(box[0] <= h[0] < box[2] and box[1] <= h[1] < box[3] for h in hints)
+    """Whether a predicted track position lies inside the box (`predictions_in`)."""
+    return predictions_in(box, hints) > 0
 
 
 @dataclass(frozen=True)

@@ -25,18 +25,13 @@ from typing import TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
-from tracker.detect import Box, holds_prediction
+from tracker.detect import Box, holds_prediction, predictions_in
 
 T = TypeVar("T")
 
 
 def _overlaps(a: Box, b: Box) -> bool:
     return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
-
-
-def _predictions_in(box: Box, hints: NDArray[np.float64] | None) -> int:
-    """How many predicted track positions (x, y) (raw left pixels; hints (N, 2+)) lie inside the box."""
-    return 0 if hints is None else sum(box[0] <= h[0] < box[2] and box[1] <= h[1] < box[3] for h in hints)
 
 
 @dataclass
@@ -130,7 +125,7 @@ class VerifySchedule:
             if held[i]:
                 forced = [False]
                 done[i] = verify(b, self._may_search(b, fr, forced))
-                if forced[0] and len(done[i]) <= _predictions_in(b, hints):
+                if forced[0] and len(done[i]) <= predictions_in(b, hints):
                     fr.in_vain(b)
             elif self.clock() <= fr.deadline:
                 fr.passed["untracked"] = True  # the first untracked box, at least, is verified every frame
