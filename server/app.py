@@ -83,7 +83,8 @@ def runtime_config(s: Settings) -> RuntimeConfig:
     servo = s.servo or ("sim" if s.source == "sim" else "none")  # the simulated gimbal moves simulated cameras only
     return RuntimeConfig(source=s.source, inputs=tuple(s.inputs), scenario=s.scenario, seed=s.seed, rig=s.rig,
                          servo=None if servo == "none" else servo, realtime=s.realtime, loop_source=True,
-                         verify_budget_ms=s.verify_budget_ms or None, sigma_budget_ms=s.sigma_budget_ms or None)
+                         verify_budget_ms=s.verify_budget_ms or None, sigma_budget_ms=s.sigma_budget_ms or None,
+                         targets=s.targets)
 
 
 def recorder_config(s: Settings) -> RecorderConfig:

@@ -145,7 +145,8 @@ class ReplayOut(BaseModel):
     progress: float = Field(description="0 to 1")
     start: float
     end: float
-    settings: dict[str, Any] = Field(description="threshold, rig, background (and the simulated scene)")
+    settings: dict[str, Any] = Field(description="threshold, rig, background (and the simulated scene), "
+                                     "targets (what ranges are measured to: auto, solid or flat)")
     frames: int = Field(description="stereo pairs replayed")
     agreement: dict[str, Any] | None = Field(description="against the live detections of the same frames: "
                                              "frames, same_count and same_detected (fractions), both_detected, "

@@ -30,6 +30,10 @@ class Settings(BaseSettings):
     servo: str | None = Field(None, description="servo: sim (simulated gimbal), none, or a driver URL "
                                                 "(maestro:/dev/ttyACM0, ascii:/dev/ttyUSB0); default: sim with "
                                                 "the simulated source, none with a real one")
+    targets: str = Field("auto", description="what the range is measured to: solid (a body's centre, half its "
+                         "assumed unseen depth, 0.5 ± 0.3 of its smaller seen extent, behind the seen face, with that "
+                         "depth's uncertainty in σ_r), flat (the seen face: flat boards) or auto (solid, except the "
+                         "simulator's flat plates: a simulated scenario not named NAME:body)")
     realtime: bool = Field(True, description="pace the tracker at the source's frame rate")
     verify_budget_ms: float = Field(2.0, ge=0, le=1000, description="real time: candidate boxes that hold no "
                                     "track's prediction, and regions beside a tracked object that hold none, are "
@@ -108,6 +112,13 @@ class Settings(BaseSettings):
     def _source(cls, v: str) -> str:
         if v not in ("sim", "files", "usb", "rtsp"):
             raise ValueError(f"unknown source {v!r}; use sim, files, usb or rtsp")
+        return v
+
+    @field_validator("targets")
+    @classmethod
+    def _targets(cls, v: str) -> str:
+        if v not in ("auto", "solid", "flat"):
+            raise ValueError(f"unknown targets {v!r}; use auto, solid or flat")
         return v
 
     @field_validator("recording")

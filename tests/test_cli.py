@@ -101,3 +101,23 @@ def test_origin_moves_the_spherical_coordinates() -> None:
          .splitlines()][-1]
     assert b["z"] == a["z"]  # the same point
     assert b["r"] == pytest.approx(float(np.linalg.norm([a["x"], a["y"], a["z"] - 1.0])), abs=1e-3)
+
+
+def test_targets_solid_puts_the_range_behind_the_seen_face() -> None:
+    def run(targets: str) -> list[dict[str, float]]:
+        out = tmeye("track", "--scenario", "walk:body", "--frames", "8", "--json", "--fast", "--targets", targets)
+        assert out.returncode == 0, out.stderr
+        return [json.loads(x) for x in out.stdout.splitlines()]
+
+    auto, solid, flat = run("auto"), run("solid"), run("flat")
+    keys = ("detected", "r", "sigma_r", "theta_deg", "phi_deg")
+    assert [[a.get(k) for k in keys] for a in auto] == [[s.get(k) for k in keys] for s in solid]  # NAME:body: solid
+    both = [(s, f) for s, f in zip(solid, flat, strict=True) if s["detected"] and f["detected"]]
+    assert len(both) >= 5
+    for s, f in both:  # farther by ρ/2 e (0.25 e), σ_r widened in quadrature by σ_ρ/2 e (0.15 e): e the body's
+        shift = s["r"] - f["r"]  # smaller seen extent (m), here a person's width, 0.3 to 0.6 m
+        assert 0.05 < shift < 0.2
+        assert abs((s["sigma_r"] ** 2 - f["sigma_r"] ** 2) ** 0.5 - 0.6 * shift) < 0.15 * 0.6 * shift
+        assert abs(s["theta_deg"] - f["theta_deg"]) < 0.05
+    bad = tmeye("track", "--targets", "round", "--frames", "1")
+    assert bad.returncode == 2 and "invalid choice: 'round'" in bad.stderr

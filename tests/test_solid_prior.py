@@ -47,3 +47,38 @@ def test_the_smaller_extent_counts_and_no_extent_or_prior_changes_nothing() -> N
     b = Localizer(rect).locate(*args, (0.0, 0.0), (60.0, 165.0))  # flat targets
     c = Localizer(rect).locate(*args)
     assert np.array_equal(a.rig, c.rig) and np.array_equal(b.rig, c.rig) and a.sigma_r == b.sigma_r == c.sigma_r
+
+
+def test_the_runtime_chooses_the_prior_from_its_targets_setting() -> None:
+    from tmeye.runtime.compose import solid_prior
+    from tmeye.runtime.config import RuntimeConfig
+
+    def prior(**kw: object) -> SolidPrior | None:
+        return solid_prior(RuntimeConfig(**kw))  # type: ignore[arg-type]
+
+    assert prior() is None  # the server's default: the simulator's endless scene of flat plates
+    assert prior(scenario="walk:body") == SolidPrior()  # the simulator's solid bodies
+    assert prior(source="files", inputs=("l.mp4", "r.mp4")) == SolidPrior()  # real cameras: solid
+    assert prior(source="recording", inputs=("d",), start=0.0, end=1.0, scenario="") == SolidPrior()
+    assert prior(source="recording", inputs=("d",), start=0.0, end=1.0, scenario="walk") is None
+    assert prior(scenario="walk", targets="solid") == SolidPrior()
+    assert prior(source="usb", inputs=("0", "1"), targets="flat") is None
+    try:
+        RuntimeConfig(targets="round")
+    except ValueError as exc:
+        assert "unknown targets 'round'" in str(exc)
+    else:
+        raise AssertionError("a bad targets setting was taken")
+
+
+def test_the_server_refuses_an_unknown_targets_setting_in_one_line(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, TMEYE_TARGETS="round")
+    p = subprocess.run([sys.executable, "-m", "tmeye", "serve", "--port", "0", "--data-dir", str(tmp_path / "d")],
+                       capture_output=True, text=True, timeout=60, env=env)
+    assert p.returncode != 0 and "unknown targets 'round'; use auto, solid or flat" in p.stderr, p.stderr
+    assert len(p.stderr.strip().splitlines()) == 1, p.stderr
+    assert not (tmp_path / "d" / "tmeye.db").exists()  # nothing made

@@ -43,13 +43,14 @@ class Agreement:
                 "range_diff_p95_m": round(float(np.percentile(d, 95)), 4) if d.size else None}
 
 
-def replay_config(data_dir: str, start: float, end: float, scenario: str, seed: int = 0) -> RuntimeConfig:
+def replay_config(data_dir: str, start: float, end: float, scenario: str, seed: int = 0,
+                  targets: str = "auto") -> RuntimeConfig:
     """The runtime of a replay: the recordings of start..end, unpaced, no servo; `scenario` "" for a
-    recording of real cameras (background: the first recorded pair)."""
+    recording of real cameras (background: the first recorded pair); `targets` as RuntimeConfig's."""
     if not (math.isfinite(start) and math.isfinite(end)):
         raise ValueError("start and end must be finite Unix times")
     return RuntimeConfig(source="recording", inputs=(data_dir,), start=start, end=end, scenario=scenario, seed=seed,
-                         servo=None, realtime=False, loop_source=False)
+                         servo=None, realtime=False, loop_source=False, targets=targets)
 
 
 def run_replay(cfg: RuntimeConfig, tuning: TrackerTuning | None, rig: StereoRig | None,

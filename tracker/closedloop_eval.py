@@ -29,8 +29,7 @@ import numpy as np
 from tracker.aim import AimConfig, AimController, ReactiveController
 from tracker.closedloop import LoopConfig, ServoLoop, background_range, survey_grid, widen_background
 from tracker.closedloop_path import LegPath
-from tracker.evaluation import EvalReport, _Acc, _report, score_frame
-from tracker.localize import SolidPrior
+from tracker.evaluation import EvalReport, _Acc, _report, score_frame, target_prior
 from tracker.pipeline import Pipeline
 from tracker.predict import CVPredictor, IMMPredictor, Measurement, TrackStatus, UKFBankPredictor
 from tracker.servo.sim import SimGimbalConfig, SimulatedGimbal
@@ -153,7 +152,7 @@ def mount_range(scenario: Scenario, margin_deg: float = 4.0) -> tuple[tuple[floa
 
 def closed_loop_pipeline(sim: SimRig, scenario: Scenario) -> Pipeline:
     """A pipeline whose background is learnt over the mount's range for this scenario."""
-    pipe = Pipeline(sim.rig, solid=SolidPrior() if scenario.bodies else None)  # bodies: solid targets
+    pipe = Pipeline(sim.rig, solid=target_prior(scenario))
     pan, tilt = mount_range(scenario)
     widen_background(pipe, *background_range(pan, tilt, sim.rig.left.size, sim.rig.left.f))
     for g in survey_grid(pan, tilt):

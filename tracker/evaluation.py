@@ -199,6 +199,12 @@ def _wide_errors(az: float, el: float, theta: float, phi: float, tt: TargetTruth
     return tuple(out)
 
 
+def target_prior(scenario: Scenario) -> SolidPrior | None:
+    """The localiser's prior on a scenario's targets: a solid body's unseen depth (SolidPrior) for the
+    `NAME:body` scenarios, none for plates (a flat board's centre is its face)."""
+    return SolidPrior() if scenario.bodies else None
+
+
 def run_scenario(name: str | Scenario, frames: int | None = None, seed: int = 0, rig: StereoRig | None = None,
                  detector: DetectorConfig | None = None, progress: Progress | None = None) -> EvalReport:
     """Run the pipeline on a scenario (a name, or a Scenario not in the list) and score it. `rig`: the
@@ -209,7 +215,7 @@ def run_scenario(name: str | Scenario, frames: int | None = None, seed: int = 0,
     if scenario.closed_loop:
         raise ValueError(f"scenario {name!r} is closed-loop: run it with the servo evaluation")
     sim = SimRig(scenario, seed=seed)
-    pipe = Pipeline(rig or sim.rig, detector, solid=SolidPrior() if scenario.bodies else None)
+    pipe = Pipeline(rig or sim.rig, detector, solid=target_prior(scenario))
     for g in survey_poses(scenario):
         pipe.learn_background(sim.background(g))
     n = min(frames or scenario.frames, scenario.frames)

@@ -33,18 +33,20 @@ FLUSH_FRAMES = 300  # tracks are committed every this many frames (and at the en
 
 @dataclass(frozen=True)
 class LiveSetup:
-    """What the live runtime runs with: its rig, its tuning and the simulated scene ("" for real cameras)."""
+    """What the live runtime runs with: its rig, its tuning, the simulated scene ("" for real cameras) and
+    what its ranges are measured to (RuntimeConfig.targets)."""
 
     rig: StereoRig | None
     tuning: TrackerTuning
     scenario: str
     seed: int
+    targets: str = "auto"
 
 
 def live_setup(settings: Settings, runtime: Runtime) -> LiveSetup:
     """The live runtime's rig and tuning, and its simulated scene when its source is the simulator."""
     return LiveSetup(runtime.comp.rig if runtime.comp is not None else None, runtime.tuning,
-                     settings.scenario if settings.source == "sim" else "", settings.seed)
+                     settings.scenario if settings.source == "sim" else "", settings.seed, settings.targets)
 
 
 def mark_interrupted(db: Session) -> None:
@@ -87,8 +89,9 @@ class ReplayJobs:
         if threshold is not None:
             tuning = tuning.updated({"detector": {"epsilon": threshold}})
         settings = {"threshold": tuning.detector.epsilon, "rig": rig_name, "scenario": live.scenario,
-                    "seed": live.seed, "background": f"simulated scene {live.scenario}" if live.scenario
-                    else "first recorded pair", "predictor": None}
+                    "seed": live.seed, "targets": live.targets,
+                    "background": f"simulated scene {live.scenario}" if live.scenario else "first recorded pair",
+                    "predictor": None}
         row = Replay(status="queued", progress=0.0, start=start, end=end, settings=settings, frames=0,
                      created_at=time.time(), created_by=user.id)
         db.add(row)
@@ -112,7 +115,7 @@ class ReplayJobs:
             with self.sessions() as db:
                 job = get_replay(db, replay_id)
                 cfg = replay_config(str(self.data_dir), job.start, job.end, job.settings["scenario"],
-                                    job.settings["seed"])
+                                    job.settings["seed"], job.settings.get("targets", "auto"))
             frames, agreement = self._replay(replay_id, cfg, rig, tuning)
             self._set(replay_id, status="done", progress=1.0, frames=frames, agreement=agreement,
                       finished_at=time.time())

@@ -27,7 +27,7 @@ def run_recording(args: argparse.Namespace) -> int:
         raise UserError(f"--data-dir {args.data_dir} is not a directory")
     scenario = "" if args.background == "first" else (args.scenario or "endless")
     try:
-        cfg = replay_config(args.data_dir, args.start, args.end, scenario, args.seed)
+        cfg = replay_config(args.data_dir, args.start, args.end, scenario, args.seed, args.targets)
         rig = load_rig(args.rig) if args.rig else None
     except (OSError, ValueError, KeyError) as exc:
         raise UserError(str(exc).splitlines()[0]) from None

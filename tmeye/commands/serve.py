@@ -8,6 +8,7 @@ import socket
 import sys
 from typing import Any
 
+from tmeye.commands.track import TARGETS_HELP
 from tmeye.errors import UserError
 
 LOG_FORMAT = "%(asctime)s %(levelname)s %(name)s: %(message)s"
@@ -25,6 +26,8 @@ def register(subparsers: Any) -> None:
     p.add_argument("--rig", help="rig file (default: the active calibration record, else the simulator's rig)")
     p.add_argument("--servo", help="sim, none, or a driver URL (maestro:/dev/ttyACM0, ascii:/dev/ttyUSB0); "
                    "default: sim with the simulated source, none with a real one")
+    p.add_argument("--targets", choices=("auto", "solid", "flat"),
+                   help=TARGETS_HELP)
     p.add_argument("--log-level", choices=("debug", "info", "warning", "error"))
     p.add_argument("--stamp-frames", action="store_true", default=None,
                    help="measurement mode: the video carries the frame index in its top-left corner")
@@ -43,7 +46,8 @@ def settings_from(args: argparse.Namespace) -> Any:
 
     given = {k: v for k, v in {"host": args.host, "port": args.port, "data_dir": args.data_dir,
                                "source": args.source, "scenario": args.scenario, "seed": args.seed,
-                               "rig": args.rig, "servo": args.servo, "log_level": args.log_level,
+                               "rig": args.rig, "servo": args.servo, "targets": args.targets,
+                               "log_level": args.log_level,
                                "stamp_frames": args.stamp_frames, "tls_cert": args.tls_cert,
                                "tls_key": args.tls_key, "trusted_proxies": args.trusted_proxy}.items()
              if v is not None}

@@ -12,6 +12,9 @@ from typing import Any
 
 from tmeye.errors import UserError
 
+TARGETS_HELP = ("what the range is measured to: solid (a body's centre, half its assumed depth behind the "
+                "seen face), flat (the seen face: boards) or auto (default: solid, except the simulator's flat plates)")
+
 
 def register(subparsers: Any) -> None:
     p = subparsers.add_parser("track", help="track a target and print per-frame telemetry")
@@ -35,6 +38,8 @@ def register(subparsers: Any) -> None:
     p.add_argument("--baseline-limits", metavar="MIN,MAX",
                    help="plausible rig baselines in metres the rig file is checked against (default 0.01,10)")
     p.add_argument("--json", action="store_true", help="one JSON line per frame")
+    p.add_argument("--targets", choices=("auto", "solid", "flat"), default="auto",
+                   help=TARGETS_HELP)
     p.add_argument("--fast", action="store_true",
                    help="simulated source: run as fast as possible instead of at the scenario's frame rate")
     p.add_argument("--loop", action="store_true", help="simulated source: repeat a finite scenario")
@@ -94,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
                             seed=args.seed,
                             rig=args.rig, servo=args.servo, realtime=not args.fast and args.source == "sim",
                             loop_source=args.loop, max_frames=args.frames, origin=parse_origin(args.origin),
-                            baseline_limits_m=parse_limits(args.baseline_limits))
+                            baseline_limits_m=parse_limits(args.baseline_limits), targets=args.targets)
         runtime = Runtime(cfg)
         sub = runtime.hub.subscribe(maxsize=1024, name="track")
         runtime.start()

@@ -18,9 +18,10 @@ from tmeye.runtime.config import RuntimeConfig, TrackerTuning
 from tracker.aim import AimConfig, AimController
 from tracker.closedloop import LoopConfig, ServoLoop, ServoSimSource, background_range, survey_grid, widen_background
 from tracker.closedloop_eval import closed_loop_imm, mount_range
-from tracker.evaluation import survey_poses
+from tracker.evaluation import survey_poses, target_prior
 from tracker.frames import FrameSource
 from tracker.geometry import StereoRig, load_rig
+from tracker.localize import SolidPrior
 from tracker.pipeline import Pipeline
 from tracker.rigcheck import RigError
 from tracker.servo import ServoError, SimulatedGimbal, open_servo
@@ -78,7 +79,20 @@ def pipeline(rig: StereoRig, cfg: RuntimeConfig, tuning: TrackerTuning, fps: flo
     with rig_errors(cfg):
         return Pipeline(rig, replace(tuning.detector, fps=fps), tuning.tracks, origin=np.array(cfg.origin, float),
                         verify_budget_ms=cfg.verify_budget_ms if cfg.realtime else None,
-                        sigma_budget_ms=cfg.sigma_budget_ms if cfg.realtime else None)
+                        sigma_budget_ms=cfg.sigma_budget_ms if cfg.realtime else None, solid=solid_prior(cfg))
+
+
+def solid_prior(cfg: RuntimeConfig) -> SolidPrior | None:
+    """The localiser's prior for cfg.targets (RuntimeConfig): with "auto", a simulated scene's own (solid
+    bodies for NAME:body, none for plates), solid for real cameras and their recordings."""
+    if cfg.targets != "auto":
+        return SolidPrior() if cfg.targets == "solid" else None
+    if cfg.source == "sim" or (cfg.source == "recording" and cfg.scenario):
+        try:
+            return target_prior(get_scenario(cfg.scenario))
+        except ValueError as exc:
+            raise ComposeError(str(exc)) from None
+    return SolidPrior()
 
 
 @contextmanager

@@ -11,6 +11,7 @@ from tracker.detect import DetectorConfig
 from tracker.tracks import TrackerConfig
 
 SOURCE_KINDS = ("sim", "files", "usb", "rtsp", "recording")
+TARGET_KINDS = ("auto", "solid", "flat")
 
 
 @dataclass(frozen=True)
@@ -28,7 +29,11 @@ class RuntimeConfig:
     target's costly 1-σ terms are worked out afresh only when they would end within this many ms of the
     step's start, else taken from a recent frame (None: every frame;
     tracker.schedule.SigmaSchedule). baseline_limits_m: the plausible
-    baselines (m) a rig file is checked against (default tracker.rigcheck.BASELINE_LIMITS_M, 1 cm to 10 m)."""
+    baselines (m) a rig file is checked against (default tracker.rigcheck.BASELINE_LIMITS_M, 1 cm to 10 m).
+    targets: what the range is measured to: "solid" (a body's centre, half its assumed unseen depth behind
+    the seen face, with that depth's uncertainty in σ_r: tracker.localize.SolidPrior), "flat" (the seen
+    face: flat boards) or "auto" (solid, except for the simulator's flat plates: a simulated scene, or the
+    recording of one, whose scenario is not NAME:body)."""
 
     source: str = "sim"
     inputs: tuple[str, ...] = ()
@@ -45,8 +50,11 @@ class RuntimeConfig:
     baseline_limits_m: tuple[float, float] | None = None
     start: float | None = None
     end: float | None = None
+    targets: str = "auto"
 
     def __post_init__(self) -> None:
+        if self.targets not in TARGET_KINDS:
+            raise ValueError(f"unknown targets {self.targets!r}; use one of {', '.join(TARGET_KINDS)}")
         if self.source not in SOURCE_KINDS:
             raise ValueError(f"unknown source {self.source!r}; use one of {', '.join(SOURCE_KINDS)}")
         if self.source == "sim" and self.inputs:

@@ -1896,7 +1896,7 @@ export interface components {
             end: number;
             /**
              * Settings
-             * @description threshold, rig, background (and the simulated scene)
+             * @description threshold, rig, background (and the simulated scene), targets (what ranges are measured to: auto, solid or flat)
              */
             settings: {
                 [key: string]: unknown;
