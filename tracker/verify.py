@@ -59,6 +59,11 @@ _SEARCH_RADIUS = 4  # px about a disparity that refining from failed to match (V
 _TAKEN = np.ones((5, 5), np.uint8)
 
 
+def _grown(m8: U8) -> BoolA:
+    """A uint8 mask's pixels grown by two (the 5x5 square): what a found object claims about it."""
+    return np.asarray(cv2.dilate(m8, _TAKEN) > 0)
+
+
 def _taken(blob: Blob, changed: BoolA | None) -> BoolA:
     """The pixels of a box that a found object explains: the object and its occlusion shadow (the object
     shifted left by d - d_background, approximately, in raw pixels), grown by two pixels. With the
@@ -69,7 +74,7 @@ def _taken(blob: Blob, changed: BoolA | None) -> BoolA:
     shadow = np.asarray(cv2.warpAffine(m8, shift, (m8.shape[1], m8.shape[0]), flags=cv2.INTER_NEAREST), np.uint8)
     if changed is not None:
         shadow[changed] = 0
-    return np.asarray(cv2.dilate(m8 | shadow, _TAKEN) > 0)
+    return _grown(m8 | shadow)
 
 
 def _elsewhere(found: list[Blob], d: float) -> BoolA | None:
@@ -82,7 +87,7 @@ def _elsewhere(found: list[Blob], d: float) -> BoolA | None:
     m8 = np.zeros(far[0].mask.shape, np.uint8)
     for b in far:
         m8 |= b.mask.view(np.uint8)
-    return np.asarray(cv2.dilate(m8, _TAKEN) > 0)
+    return _grown(m8)
 
 
 class Verifier:
