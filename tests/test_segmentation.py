@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from tracker.segmentation import HeightHistory, edge_quantisation_px, hull_gap_px
 
@@ -12,31 +13,48 @@ def _centroid(m: np.ndarray) -> np.ndarray:
     return np.array([xs.mean(), ys.mean()])
 
 
-def test_edge_quantisation_meets_randomly_covered_edges() -> None:
-    # a 40 x 60 px plate whose edge pixels are each in or out by their unknown coverage (texture and
-    # background vary along the edge): the centroid's scatter over many frames is what the term says
-    rng = np.random.default_rng(1)
-    h, w = 60, 40
-    errs = []
-    for _ in range(400):
-        m = np.zeros((h + 4, w + 4), bool)
-        left = 2 + (rng.random(h) < 0.5)  # each row's end pixel in with probability 1/2 (coverage ~ U[0, 1])
-        right = 2 + w - (rng.random(h) < 0.5)
-        for r in range(h):
-            m[2 + r, left[r]:right[r]] = True
-        errs.append(_centroid(m)[0] - (2 + w / 2 - 0.5))
-        sx, _ = edge_quantisation_px(m)
-    measured = float(np.sqrt(np.mean(np.square(errs))))
-    assert 0.6 * sx < measured < 1.6 * sx  # Bernoulli ends: 1/4 px² a row end against the model's 1/12 ... 1/4
+def _sampled(shape: str, size: tuple[float, float], c: np.ndarray, turn: float = 0.0) -> np.ndarray:
+    """A disc (radius size[0]) or board (width x height) centred at c (px), point-sampled at pixel centres."""
+    yy, xx = np.mgrid[0:200, 0:200].astype(float)
+    u, v = xx - c[0], yy - c[1]
+    if shape == "disc":
+        return np.asarray(u * u + v * v <= size[0] ** 2)
+    ca, sa = np.cos(turn), np.sin(turn)
+    return np.asarray((np.abs(u * ca + v * sa) <= size[0] / 2) & (np.abs(v * ca - u * sa) <= size[1] / 2))
 
 
-def test_edge_quantisation_falls_with_size_and_is_zero_when_empty() -> None:
-    small, large = np.zeros((60, 60), bool), np.zeros((240, 240), bool)
-    small[10:50, 10:50] = True
-    large[20:180, 20:180] = True
-    s, big = edge_quantisation_px(small), edge_quantisation_px(large)
-    assert abs(s[0] - 1 / np.sqrt(24 * 40)) < 0.3 / np.sqrt(24 * 40)  # about 1 / √(24 H) for a square
-    assert big[0] < 0.6 * s[0] and big[1] < 0.6 * s[1]
+@pytest.mark.parametrize(("shape", "size", "turn", "lo"), [("disc", (8.0, 0.0), 0.0, 0.7),
+                                                            ("disc", (20.0, 0.0), 0.0, 0.7),
+                                                            ("board", (30.5, 100.5), 0.0, 0.7),
+                                                            ("board", (40.0, 120.0), 0.2, 0.25)])
+def test_edge_quantisation_meets_point_sampled_outlines(shape: str, size: tuple[float, float], turn: float,
+                                                        lo: float) -> None:
+    # the outline at random sub-pixel positions: the centroid's scatter about the true centre is what the
+    # term says (a turned board's staircase pins its sides down better than the term, which stays cautious)
+    rng = np.random.default_rng(3)
+    errs, terms = [], []
+    for _ in range(200):
+        c = np.array([100.0, 100.0]) + rng.random(2)
+        m = _sampled(shape, size, c, turn)
+        errs.append(_centroid(m) - c)
+        terms.append(edge_quantisation_px(m))
+    measured, term = np.sqrt(np.mean(np.square(errs), axis=0)), np.mean(terms, axis=0)
+    assert np.all(lo * term < measured) and np.all(measured < 1.5 * term), (measured, term)
+
+
+def test_a_board_seen_square_on_is_off_by_a_fifth_of_a_pixel_whatever_its_size() -> None:
+    # its straight sides move as one: 1/√24 px along each axis, where independent edge pixels would give
+    # 1/√(24 H) and less
+    for n in (40, 160):
+        m = np.zeros((n + 20, n + 20), bool)
+        m[10:10 + n, 10:10 + n] = True
+        sx, sy = edge_quantisation_px(m)
+        assert abs(sx - 1 / np.sqrt(24)) < 0.01 and abs(sy - 1 / np.sqrt(24)) < 0.01
+    ragged = np.zeros((80, 80), bool)  # a ragged side (row ends one column in or out) is a staircase
+    rng = np.random.default_rng(2)
+    for r in range(10, 70):
+        ragged[r, 10 + int(rng.random() < 0.5):70 - int(rng.random() < 0.5)] = True
+    assert edge_quantisation_px(ragged)[0] < 0.05
     assert edge_quantisation_px(np.zeros((10, 10), bool)) == (0.0, 0.0)
 
 
