@@ -94,7 +94,8 @@ def test_a_head_past_the_necks_gap_is_part_of_the_body_a_farther_or_distant_regi
     far_off[20:30, 80:95] = True  # 10 px to the side of the torso
     assert not same_body(torso, 20.0, far_off, 20.0)
     assert not same_body(np.zeros_like(torso), 20.0, head, 20.0)
-
+    assert same_body(head, 20.5, torso, 20.0)  # the head found first: the torso's height sets the gap still
+    assert not same_body(far_off, 20.0, torso, 20.0)
 
 
 def test_a_new_region_that_matches_nowhere_whole_is_searched_by_thirds(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -96,13 +96,15 @@ PART_GAP_REL = 0.03
 def same_body(a: BoolA, d_a: float, b: BoolA, d_b: float) -> bool:
     """Whether region b (box pixels, disparity d_b px) is a part of the body of region a (d_a): their
     disparities differ by less than the rival gap of own_pixels (max(MIN_GAP_PX, MIN_GAP_REL d)) and b lies
-    within max(PART_GAP_MIN_PX, PART_GAP_REL h_a) px of a, h_a the rows a spans."""
+    within max(PART_GAP_MIN_PX, PART_GAP_REL h) px of a, h the rows the taller of the two spans, whichever
+    was found first (a head verified before its body is as much a part of it as after)."""
     if abs(d_a - d_b) >= max(MIN_GAP_PX, MIN_GAP_REL * max(d_a, d_b)):
         return False
-    rows = np.flatnonzero(a.any(axis=1))
-    if rows.size == 0:
+    rows, rows_b = np.flatnonzero(a.any(axis=1)), np.flatnonzero(b.any(axis=1))
+    if rows.size == 0 or rows_b.size == 0:
         return False
-    gap = max(PART_GAP_MIN_PX, int(round(PART_GAP_REL * (rows[-1] - rows[0] + 1))))
+    h = max(rows[-1] - rows[0] + 1, rows_b[-1] - rows_b[0] + 1)
+    gap = max(PART_GAP_MIN_PX, int(round(PART_GAP_REL * h)))
     k = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * gap + 1, 2 * gap + 1))
     return bool(np.any((cv2.dilate(a.view(np.uint8), k) > 0) & b))
 
