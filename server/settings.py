@@ -7,10 +7,18 @@ import ipaddress
 from pathlib import Path
 from typing import Any
 
-from pydantic import Field, field_validator, model_validator
+from pydantic import Field, ValidationInfo, field_validator, model_validator
 from pydantic_settings import BaseSettings, PydanticBaseSettingsSource, SettingsConfigDict, TomlConfigSettingsSource
 
 DEFAULT_DATA_DIR = "./tmeye-data"
+
+
+# the settings that take one of a few words: (what the message calls it, the words)
+_CHOICES: dict[str, tuple[str, tuple[str, ...]]] = {
+    "source": ("source", ("sim", "files", "usb", "rtsp")),
+    "targets": ("targets", ("auto", "solid", "flat")),
+    "recording": ("recording mode", ("continuous", "events", "off")),
+}
 
 
 class Settings(BaseSettings):
@@ -107,25 +115,12 @@ class Settings(BaseSettings):
                                                                   "before its activation (s)")
     log_level: str = Field("info", description="debug, info, warning or error")
 
-    @field_validator("source")
+    @field_validator("source", "targets", "recording")
     @classmethod
-    def _source(cls, v: str) -> str:
-        if v not in ("sim", "files", "usb", "rtsp"):
-            raise ValueError(f"unknown source {v!r}; use sim, files, usb or rtsp")
-        return v
-
-    @field_validator("targets")
-    @classmethod
-    def _targets(cls, v: str) -> str:
-        if v not in ("auto", "solid", "flat"):
-            raise ValueError(f"unknown targets {v!r}; use auto, solid or flat")
-        return v
-
-    @field_validator("recording")
-    @classmethod
-    def _recording(cls, v: str) -> str:
-        if v not in ("continuous", "events", "off"):
-            raise ValueError(f"unknown recording mode {v!r}; use continuous, events or off")
+    def _one_of(cls, v: str, info: ValidationInfo) -> str:
+        what, allowed = _CHOICES[info.field_name or ""]
+        if v not in allowed:
+            raise ValueError(f"unknown {what} {v!r}; use {', '.join(allowed[:-1])} or {allowed[-1]}")
         return v
 
     @field_validator("trusted_proxies")
