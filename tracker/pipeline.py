@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 from tracker.bgdepth import BackgroundDepth
 from tracker.bglearn import LearntBackground, Sighting, StreamLearnConfig, StreamLearner, changed_box
 from tracker.detect import Box, DetectorConfig, StereoSubtractor, paint_masks
-from tracker.disparity_sigma import scatter_sigma
+from tracker.disparity_sigma import parts_sigma
 from tracker.egomotion import PoseCompensation
 from tracker.frames import StereoFrame
 from tracker.geometry import StereoRig
@@ -200,8 +200,9 @@ class Pipeline:
     def _disparity_sigma(self, frame: StereoFrame, b: Blob) -> float:
         """The scatter of the disparities of the blob's parts (px; tracker.disparity_sigma: correlated
         residuals, interpolation, a slanted surface; it includes the pixel noise the matcher's σ stands
-        for): the disparity's 1-σ where larger than the matcher's own."""
-        return scatter_sigma(self.verifier.part_disparities(frame, b))
+        for), or twice the matcher's own with too few parts: the disparity's 1-σ where larger than the
+        matcher's own."""
+        return parts_sigma(self.verifier.part_disparities(frame, b), b.disparity_sigma)
 
     def _centroid_extra(self, frame: StereoFrame, b: Blob, blobs: list[Blob]) -> tuple[float, float]:
         """The centroid's further 1-σ (px, x and y): where the target is seen in part, where its outline
