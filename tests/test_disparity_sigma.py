@@ -4,7 +4,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from tracker.disparity_sigma import COLUMNS, MIN_PARTS, ROWS, part_disparities, scatter_sigma
+from tracker.disparity_sigma import (
+    COLUMNS,
+    FEW_PARTS_FACTOR,
+    MIN_PARTS,
+    ROWS,
+    part_disparities,
+    parts_sigma,
+    scatter_sigma,
+)
 from tracker.stereo import refine_region
 
 
@@ -61,3 +69,18 @@ def test_parts_without_texture_or_pixels_are_left_out() -> None:
     flat[:20] = 128  # the top row of parts has no texture
     assert len(part_disparities(flat, right[40:80], core, 56, 10.0, 0.8)) == COLUMNS - 1
     assert part_disparities(left[40:80], right[40:80], core, 2, 10.0, 0.8) == []  # the strip ends
+
+
+def test_too_few_parts_stand_for_twice_the_matchers_sigma_and_the_phase_term_is_in_every_range_sigma() -> None:
+    many = [10.0, 10.1, 9.9, 10.05, 9.95, 10.0]
+    assert parts_sigma(many, 0.01) == scatter_sigma(many)
+    assert parts_sigma(many[:MIN_PARTS - 1], 0.01) == FEW_PARTS_FACTOR * 0.01 == 0.02
+    from tracker.localize import PHASE_SIGMA_PX, Localizer
+    from tracker.rectify import Rectifier
+    from tracker.sim.rig import default_rig
+
+    rect = Rectifier(default_rig())
+    loc = Localizer(rect).locate(np.array([320.0, 240.0]), 10.0, 0.0, 10_000, None)
+    z = rect.f * rect.rig.baseline / 10.0  # σ_Z = Z² / (f b) σ_d with σ_d = √(0.02² + 0.012²) at the floor
+    expected = z * z / (rect.f * rect.rig.baseline) * float(np.hypot(0.02, PHASE_SIGMA_PX))
+    assert abs(loc.sigma_r - expected) < 0.05 * expected
