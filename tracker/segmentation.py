@@ -25,7 +25,7 @@ point-sampled outlines at 300 random sub-pixel positions each: discs of radius 8
 0.049, 0.034 and 0.022 px (the term: 0.049, 0.033, 0.021), boards of 30 x 100 and 80 x 240 px by 0.27 to
 0.30 px (their two sides alike offset when the width is a whole number of pixels: 1/√12 = 0.29; 0.20 with
 the sides independent), the same boards turned by 3 to 34 degrees by 0.010 to 0.024 px (the term: 0.018 to
-0.034). The earlier term took every edge pixel as independent, 0.014 to 0.05 px for those boards: the
+0.040). The earlier term took every edge pixel as independent, 0.014 to 0.05 px for those boards: the
 endless scene's boards, standing still for seconds at one sub-pixel offset, were 26.6 times their
 azimuth 1-σ² off on average.
 
@@ -128,22 +128,22 @@ def _end_runs(m8: NDArray[np.uint8], cx: float, cy: float) -> tuple[float, float
             _, _, stats, centres = cv2.connectedComponentsWithStats(e, connectivity=4)
             k = stats[1:, cv2.CC_STAT_HEIGHT].astype(np.float64)
             d = centres[1:, 0] - (c + 1.0)  # the border of one pixel
-            straight = _straight(e, np.asarray(stats[1:], np.int32), bh if axis == 0 else bw)
+            straight = _straight(e, np.asarray(stats[1:], np.int32), extent=bh if axis == 0 else bw)
             v += float(np.where(straight, k * k, k) @ (d * d))
         sums.append(v)
     return sums[0], sums[1]
 
 
-def _straight(e: NDArray[np.uint8], stats: NDArray[np.int32], across: int) -> NDArray[np.bool_]:
+def _straight(e: NDArray[np.uint8], stats: NDArray[np.int32], extent: int) -> NDArray[np.bool_]:
     """Which runs down the columns of e (end pixels, a zero border around them; stats of their
-    components) are straight: at least 2√(2 E) long (E = `across`, the outline's extent along them: a
+    components) are straight: at least 2√(2 E) long (E = `extent`, the outline's extent along them: a
     curved outline turns within about 2√R of its radius R) and not a step of a slanted outline's staircase
     (whose neighbouring steps, one column to one side beyond its top and to the other side beyond its
     bottom, carry on the slant)."""
     x, top, n = stats[:, cv2.CC_STAT_LEFT], stats[:, cv2.CC_STAT_TOP], stats[:, cv2.CC_STAT_HEIGHT]
     above = e[top - 1, x + 1].astype(np.int8) - e[top - 1, x - 1].astype(np.int8)  # +1: the step above is right
     below = e[top + n, x + 1].astype(np.int8) - e[top + n, x - 1].astype(np.int8)
-    return np.asarray((n >= 2.0 * np.sqrt(2.0 * across)) & ~((above != 0) & (above == -below)))
+    return np.asarray((n >= 2.0 * np.sqrt(2.0 * extent)) & ~((above != 0) & (above == -below)))
 
 
 class HeightHistory:
