@@ -8,7 +8,7 @@ import socket
 import sys
 from typing import Any
 
-from tmeye.commands.track import TARGETS_HELP
+from tmeye.commands.track import TARGET_CHOICES, TARGETS_HELP
 from tmeye.errors import UserError
 
 LOG_FORMAT = "%(asctime)s %(levelname)s %(name)s: %(message)s"
@@ -26,7 +26,7 @@ def register(subparsers: Any) -> None:
     p.add_argument("--rig", help="rig file (default: the active calibration record, else the simulator's rig)")
     p.add_argument("--servo", help="sim, none, or a driver URL (maestro:/dev/ttyACM0, ascii:/dev/ttyUSB0); "
                    "default: sim with the simulated source, none with a real one")
-    p.add_argument("--targets", choices=("auto", "solid", "flat"),
+    p.add_argument("--targets", choices=TARGET_CHOICES,
                    help=TARGETS_HELP)
     p.add_argument("--log-level", choices=("debug", "info", "warning", "error"))
     p.add_argument("--stamp-frames", action="store_true", default=None,

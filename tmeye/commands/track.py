@@ -12,6 +12,7 @@ from typing import Any
 
 from tmeye.errors import UserError
 
+TARGET_CHOICES = ("auto", "solid", "flat")  # RuntimeConfig.targets (kept light: no runtime import here)
 TARGETS_HELP = ("what the range is measured to: solid (a body's centre, half its assumed depth behind the "
                 "seen face), flat (the seen face: boards) or auto (default: solid, except the simulator's flat plates)")
 
@@ -38,7 +39,7 @@ def register(subparsers: Any) -> None:
     p.add_argument("--baseline-limits", metavar="MIN,MAX",
                    help="plausible rig baselines in metres the rig file is checked against (default 0.01,10)")
     p.add_argument("--json", action="store_true", help="one JSON line per frame")
-    p.add_argument("--targets", choices=("auto", "solid", "flat"), default="auto",
+    p.add_argument("--targets", choices=TARGET_CHOICES, default="auto",
                    help=TARGETS_HELP)
     p.add_argument("--fast", action="store_true",
                    help="simulated source: run as fast as possible instead of at the scenario's frame rate")
