@@ -8,7 +8,15 @@ import numpy as np
 from tracker.localize import Localizer
 from tracker.rectify import Rectifier
 from tracker.sim.rig import default_rig
-from tracker.visibility import VisibilityConfig, cut_sides, extra_sigma_px, object_and_shadow, padded, with_objects
+from tracker.visibility import (
+    VisibilityConfig,
+    cut_and_skew,
+    cut_sides,
+    extra_sigma_px,
+    object_and_shadow,
+    padded,
+    with_objects,
+)
 
 CFG = VisibilityConfig()
 SIZE = (640, 480)
@@ -66,6 +74,32 @@ def test_the_extra_sigma_is_kappa_times_the_visible_extent_per_cut_side() -> Non
     assert extra_sigma_px(mask, (0, 1), CFG) == (0.0, CFG.kappa * 60)
     sx, sy = extra_sigma_px(mask, (2, 0), CFG)
     assert np.isclose(sx, CFG.kappa * 20 * np.sqrt(2)) and sy == 0.0
+
+
+def test_a_corner_hidden_by_a_round_occluder_moves_the_centroid_along_the_cut_side() -> None:
+    """A board 40 x 80 px whose lower left corner is behind a nearer round bush: only its bottom side is
+    cut, yet its visible centroid lies right of (and above) the whole board's. The 1-σ along x covers
+    that move; a bottom hidden evenly moves the centroid along y only."""
+    box, shape = (100, 100, 200, 220), (120, 100)
+    board = np.zeros(shape, bool)
+    board[10:90, 30:70] = True
+    yy, xx = np.mgrid[:shape[0], :shape[1]]
+    valid = np.ones(shape, bool)
+    for radius in (20, 30):
+        bush = (xx - 30) ** 2 + (yy - 90) ** 2 <= radius**2
+        mask = board & ~bush
+        bg = np.where(bush, 12.0, 5.0).astype(np.float32)  # the bush nearer than the board (disparity 9 px)
+        cut, (sx, sy) = cut_and_skew(mask, box, SIZE, 9.0, bg, valid, CFG)
+        moved = np.nonzero(mask)[1].mean() - np.nonzero(board)[1].mean()  # 1.2 and 2.0 px
+        assert cut == (0, 1) and sy == 0.0
+        assert moved <= sx <= CFG.kappa * 40  # covered, and no more than a cut side along x would add
+    mask = board.copy()
+    mask[70:] = False
+    bg = np.full(shape, 5.0, np.float32)
+    bg[70:] = 12.0
+    cut, (sx, sy) = cut_and_skew(mask, box, SIZE, 9.0, bg, valid, CFG)
+    assert cut == (0, 1) and abs(sx) < 1e-9 and sy == 0.0
+    assert cut_and_skew(mask, box, SIZE, 9.0, None, None, CFG) == ((0, 0), (0.0, 0.0))
 
 
 def test_the_localizer_widens_only_the_cut_axis() -> None:

@@ -33,7 +33,7 @@ from tracker.tracks import MultiTracker, TrackerConfig
 from tracker.verify import Blob, Verifier
 from tracker.visibility import (
     VisibilityConfig,
-    cut_sides,
+    cut_and_skew,
     extra_sigma_px,
     object_and_shadow,
     padded,
@@ -229,11 +229,12 @@ class Pipeline:
         cm = None if self.subtractor.moving else self.subtractor.correspondence(0, frame.gimbal, box)
         disp, valid = with_objects(None if cm is None else cm.disparity, None if cm is None else cm.valid, box, others)
         n = min(b.box[3] + 2, self.rig.left.size[1]) - box[1]  # cut_sides: the 2-px ring below, not the ground
-        cut = cut_sides(mask[:n], (box[0], box[1], box[2], box[1] + n), self.rig.left.size, b.disparity,
-                        None if disp is None else disp[:n], None if valid is None else valid[:n], self.visibility)
+        cut, (sx, sy) = cut_and_skew(mask[:n], (box[0], box[1], box[2], box[1] + n), self.rig.left.size,
+                                     b.disparity, None if disp is None else disp[:n],
+                                     None if valid is None else valid[:n], self.visibility)
         px, py = extra_sigma_px(b.mask, cut, self.visibility) if any(cut) else (0.0, 0.0)
         ux, uy = unseen_below(mask, b.disparity, disp, valid, self.visibility)
-        return float(np.hypot(px, ux)), float(np.hypot(py, uy))
+        return float(np.sqrt(px * px + sx * sx + ux * ux)), float(np.sqrt(py * py + sy * sy + uy * uy))
 
     def _foreground_low(self, blobs: list[Blob]) -> NDArray[np.uint8] | None:
         if not blobs:

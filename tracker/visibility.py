@@ -63,29 +63,70 @@ def cut_sides(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, int]
     endless scene, 12 px, on the ring's bottom side too), and that band counts as hidden.
     mask: (h, w) over box (x0, y0, x1, y1), raw left pixels; size: the image's (width, height). Only the
     ring and band inside the box are looked at: pass the mask `padded`."""
+    return cut_and_skew(mask, box, size, disparity, bg_disparity, bg_valid, cfg)[0]
+
+
+def cut_and_skew(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, int], disparity: float,
+                 bg_disparity: F32 | None, bg_valid: BoolA | None, cfg: VisibilityConfig
+                 ) -> tuple[tuple[int, int], tuple[float, float]]:
+    """`cut_sides`, and how far (px, x and y) the centroid may move across the sides cut by a nearer or
+    level background, which need not hide the target evenly: a board behind a bush's round top loses its
+    lower left corner, and its centroid moves right, along x, though only its bottom side is cut (endless,
+    frames 1195-1244: 2.1 px). The hidden part is taken to go on beyond each ring pixel that hid it, away
+    from the visible centroid, about as far as a cut side's extra 1-σ supposes (kappa times the visible
+    extent that way); the centroid moves by that part's share of the whole area times its centroid's
+    offset. The move's x is returned where a top or bottom side is cut, its y where a left or right one
+    is (the cut sides' own axis has `extra_sigma_px`)."""
     x0, y0, _, _ = box
     w, h = size
     m8 = mask.view(np.uint8)
     bx, by, bw, bh = cv2.boundingRect(m8)
     if bw == 0:
-        return 0, 0
+        return (0, 0), (0.0, 0.0)
     left_edge = int(np.ceil(max(disparity, 0.0))) + 2
     cut = [x0 + bx <= left_edge, x0 + bx + bw >= w, y0 + by <= 0, y0 + by + bh >= h]  # left, right, top, bottom
-    if bg_disparity is not None and bg_valid is not None:
-        mom = cv2.moments(m8, binaryImage=True)
-        centre, half = (mom["m10"] / mom["m00"], mom["m01"] / mom["m00"]), (max(bw / 2.0, 1.0), max(bh / 2.0, 1.0))
-        ring = _sides((cv2.dilate(m8, _RING) > 0) & ~mask, centre, half)  # the 2-px ring inside the box
-        edge = _sides(mask & (cv2.erode(m8, _RING) == 0), centre, half)  # the outline's own 2-px rim
-        nearer = bg_valid & (bg_disparity > disparity + cfg.nearer_px)
-        hidden = _right_shadow(nearer, bg_disparity, disparity)
-        level = bg_valid & (bg_disparity > disparity - cfg.level_px)
-        behind = bg_valid & (bg_disparity < disparity - cfg.jump_px)
-        for k, ((ys, xs), (ey, ex)) in enumerate(zip(ring, edge, strict=True)):
-            need = cfg.min_share * xs.size
-            cut[k] |= xs.size > 0 and int(np.count_nonzero(hidden[ys, xs])) >= need
-            cut[k] |= (xs.size > 0 and int(np.count_nonzero(level[ys, xs])) >= need
-                       and int(np.count_nonzero(behind[ey, ex])) >= cfg.min_share * ex.size)
-    return int(cut[0]) + int(cut[1]), int(cut[2]) + int(cut[3])
+    if bg_disparity is None or bg_valid is None:
+        return (int(cut[0]) + int(cut[1]), int(cut[2]) + int(cut[3])), (0.0, 0.0)
+    mom = cv2.moments(m8, binaryImage=True)
+    centre, half = (mom["m10"] / mom["m00"], mom["m01"] / mom["m00"]), (max(bw / 2.0, 1.0), max(bh / 2.0, 1.0))
+    ring_px = (cv2.dilate(m8, _RING) > 0) & ~mask  # the 2-px ring inside the box
+    ring = _sides(ring_px, centre, half)
+    edge = _sides(mask & (cv2.erode(m8, _RING) == 0), centre, half)  # the outline's own 2-px rim
+    nearer = bg_valid & (bg_disparity > disparity + cfg.nearer_px)
+    hidden = _right_shadow(nearer, bg_disparity, disparity)
+    level = bg_valid & (bg_disparity > disparity - cfg.level_px)
+    behind = bg_valid & (bg_disparity < disparity - cfg.jump_px)
+    by_bg = [False] * 4
+    for k, ((ys, xs), (ey, ex)) in enumerate(zip(ring, edge, strict=True)):
+        need = cfg.min_share * xs.size
+        by_bg[k] = xs.size > 0 and (int(np.count_nonzero(hidden[ys, xs])) >= need or (
+            int(np.count_nonzero(level[ys, xs])) >= need
+            and int(np.count_nonzero(behind[ey, ex])) >= cfg.min_share * ex.size))
+        cut[k] |= by_bg[k]
+    skew = (0.0, 0.0)
+    if any(by_bg):
+        sx, sy = _hidden_shift(ring_px & (hidden | level), centre, (bw, bh), mom["m00"], cfg.kappa)
+        skew = (abs(sx) if by_bg[2] or by_bg[3] else 0.0, abs(sy) if by_bg[0] or by_bg[1] else 0.0)
+    return (int(cut[0]) + int(cut[1]), int(cut[2]) + int(cut[3])), skew
+
+
+def _hidden_shift(hid: BoolA, centre: tuple[float, float], extent: tuple[int, int], area: float, kappa: float
+                  ) -> tuple[float, float]:
+    """The visible centroid's offset (px, x and y) from that of the whole target, if it went on unseen
+    beyond the ring pixels `hid` (each half a pixel of outline, the ring being 2 px wide) away from the
+    centroid `centre`, by kappa times the visible extent (width, height) that way. area: visible (px²)."""
+    ys, xs = np.nonzero(hid)
+    if xs.size == 0:
+        return 0.0, 0.0
+    dx, dy = xs - centre[0], ys - centre[1]
+    r = np.maximum(np.hypot(dx, dy), 1e-9)
+    ux, uy = dx / r, dy / r
+    depth = kappa * (np.abs(ux) * extent[0] + np.abs(uy) * extent[1])  # how far it goes on, px
+    a = 0.5 * depth  # the hidden area behind each ring pixel, px²
+    hx, hy = xs + 0.5 * depth * ux, ys + 0.5 * depth * uy  # its centroid
+    share = float(a.sum()) / (area + float(a.sum()))
+    return (share * (float(np.average(hx, weights=a)) - centre[0]),
+            share * (float(np.average(hy, weights=a)) - centre[1]))
 
 
 def with_objects(bg_disparity: F32 | None, bg_valid: BoolA | None, box: tuple[int, int, int, int],
