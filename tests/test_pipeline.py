@@ -44,6 +44,19 @@ def test_each_stage_against_ground_truth() -> None:
     assert checked == 39
 
 
+def test_a_track_predicted_past_infinity_is_verified_as_a_new_object() -> None:
+    """A track whose disparity falls fast is predicted at a disparity below 0 (a live server's frame
+    failed with "d0 must be finite and >= 0, got -4.2"): that prediction narrows no search."""
+    sim, pipe = _pipeline("walk")
+    for _ in range(5):
+        res = pipe.step(sim.step().frame)
+    assert res.primary is not None
+    x, y = res.primary.blob.centroid_raw
+    pipe.tracker.predictions = lambda t: np.array([[x, y, -4.2], [x, y, np.nan]])  # type: ignore[method-assign]
+    res = pipe.step(sim.step().frame)
+    assert len(res.detections) == 1
+
+
 def test_lighting_step_does_not_create_or_lose_targets() -> None:
     sim, pipe = _pipeline("illumination")
     for _ in range(70):  # through the 1.0 -> 1.3 step at frame 60

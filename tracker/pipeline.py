@@ -147,6 +147,8 @@ class Pipeline:
         cands = self.subtractor.step(frame)
         t1 = time.perf_counter()
         hints = self.ego.from_home(self.tracker.predictions(frame.t), frame.gimbal)  # at this frame's pose
+        # a track receding fast may be predicted past infinity (disparity <= 0): that narrows no search
+        hints = hints[np.isfinite(hints).all(axis=1) & (hints[:, 2] > 0)]
         boxes = cands.worth_verifying(self.subtractor.cfg.moving_min_cells, hints)
         blobs, deferred = self.schedule.run(boxes, hints, lambda box, may_search: self.verifier.verify_all(
             frame, box, hints, may_search=may_search), t0)
