@@ -14,6 +14,7 @@ from tracker.visibility import (
     cut_sides,
     extra_sigma_px,
     object_and_shadow,
+    occluder_below,
     padded,
     with_objects,
 )
@@ -100,6 +101,26 @@ def test_a_corner_hidden_by_a_round_occluder_moves_the_centroid_along_the_cut_si
     cut, (sx, sy) = cut_and_skew(mask, box, SIZE, 9.0, bg, valid, CFG)
     assert cut == (0, 1) and abs(sx) < 1e-9 and sy == 0.0
     assert cut_and_skew(mask, box, SIZE, 9.0, None, None, CFG) == ((0, 0), (0.0, 0.0))
+
+
+def test_the_occluder_below_a_target_bounds_how_much_of_it_is_hidden() -> None:
+    """A head 12 px tall above a hedge 24 px tall: the walker goes on behind it down to its feet, at
+    most 24 px, so the centroid may lie up to 12 px high, where kappa times the visible height says
+    4.8. A hedge behind the target, or none, bounds nothing."""
+    box, shape = (100, 100, 160, 180), (80, 60)
+    mask = np.zeros(shape, bool)
+    mask[10:22, 20:40] = True
+    bg = np.full(shape, 3.0, np.float32)
+    bg[22:46, :] = 7.3  # the hedge, nearer than the walker (disparity 6.6), from the row below the head
+    valid = np.ones(shape, bool)
+    assert cut_sides(mask, box, SIZE, 6.6, bg, valid, CFG) == (0, 1)
+    assert occluder_below(mask, 6.6, bg, valid, CFG) == 24.0
+    bg[22:46, :] = 6.0  # behind the walker: nothing hides it
+    assert occluder_below(mask, 6.6, bg, valid, CFG) is None
+    bg[22:46, :] = 7.3
+    bg[22:26, :] = 3.0  # the hedge starts 4 rows below: it does not meet the outline
+    assert occluder_below(mask, 6.6, bg, valid, CFG) is None
+    assert occluder_below(mask, 6.6, None, None, CFG) is None
 
 
 def test_the_localizer_widens_only_the_cut_axis() -> None:

@@ -36,6 +36,7 @@ from tracker.visibility import (
     cut_and_skew,
     extra_sigma_px,
     object_and_shadow,
+    occluder_below,
     padded,
     unseen_below,
     with_objects,
@@ -235,6 +236,9 @@ class Pipeline:
                                      b.disparity, None if disp is None else disp[:n],
                                      None if valid is None else valid[:n], self.visibility)
         px, py = extra_sigma_px(b.mask, cut, self.visibility) if any(cut) else (0.0, 0.0)
+        if cut[1] and (tall := occluder_below(mask, b.disparity, disp, valid, self.visibility)) is not None:
+            py *= float(np.sqrt((cut[1] - 1) / cut[1]))  # the bottom's kappa term, by the occluder's height
+            py = float(np.hypot(py, 0.5 * tall))
         ux, uy = unseen_below(mask, b.disparity, disp, valid, self.visibility)
         return float(np.sqrt(px * px + sx * sx + ux * ux)), float(np.sqrt(py * py + sy * sy + uy * uy))
 

@@ -207,6 +207,39 @@ def extra_sigma_px(mask: BoolA, cut: tuple[int, int], cfg: VisibilityConfig) -> 
     return cfg.kappa * bw * float(np.sqrt(cut[0])), cfg.kappa * bh * float(np.sqrt(cut[1]))
 
 
+def occluder_below(mask: BoolA, disparity: float, bg_disparity: F32 | None, bg_valid: BoolA | None,
+                   cfg: VisibilityConfig) -> float | None:
+    """How tall (px) the nearer background is that hides the target's bottom: in each of the mask's
+    columns, the run of rows of a background nearer than the target by nearer_px that starts within
+    the 2-px ring below the mask's lowest pixel; the median of those runs over the columns that have one,
+    if they are at least min_share of the columns; None otherwise or where the background is not known.
+    The hidden part goes on down at most that far (a walker behind a hedge: to its feet behind it), so
+    the centroid lies up to half that above the whole target's: a better bound than kappa times the
+    visible height where the occluder is much taller than what is seen (endless: a head 12 px above a
+    hedge 24 px tall, off by 14 px), or much shorter. mask, bg_disparity, bg_valid: (h, w) over the same
+    box, padded below (`padded`)."""
+    if bg_disparity is None or bg_valid is None:
+        return None
+    h, _ = mask.shape
+    bx, by, bw, bh = cv2.boundingRect(mask.view(np.uint8))
+    if bw == 0:
+        return None
+    m = mask[by:by + bh, bx:bx + bw]
+    low = by + bh - 1 - np.argmax(m[::-1], axis=0)  # each column's lowest mask row
+    nearer = bg_valid[:, bx:bx + bw] & (bg_disparity[:, bx:bx + bw] > disparity + cfg.nearer_px)
+    rows = np.arange(h)[:, None]
+    below = (rows > low) & (rows <= low + 3)  # the ring below, where the occluder's top must be
+    starts = np.where(below & nearer, rows, h).min(axis=0)  # its first nearer row in each column
+    has = starts < h
+    if int(np.count_nonzero(has)) < max(cfg.min_share * bw, 1):
+        return None
+    # the run from there: rows up to the first one below it that is not nearer
+    after = (rows >= starts) & ~nearer
+    ends = np.where(after, rows, h).min(axis=0)
+    runs = ends - starts
+    return float(np.median(runs[has]))
+
+
 def unseen_below(mask: BoolA, disparity: float, bg_disparity: F32 | None, bg_valid: BoolA | None,
                  cfg: VisibilityConfig) -> tuple[float, float]:
     """How far (px, x and y) the centroid would move if the target went on down, unseen, to the ground
