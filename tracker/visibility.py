@@ -6,6 +6,8 @@ outline meets the image border, or a background nearer than the target (a hedge 
 post), it may go on out of sight: the visible centroid then lies off the centre, towards the visible part,
 by half of what is hidden. How much is hidden is unknown from one frame; the 1-σ added along that axis is
 `kappa` times the visible extent (a person two-thirds hidden by a hedge is off by about one visible height).
+Where the hidden part lies to one side of a cut side, the centroid moves along it too (`cut_and_skew`); where a
+nearer background hides the bottom, the target goes on at most that occluder's height down (`occluder_below`).
 """
 
 from __future__ import annotations
