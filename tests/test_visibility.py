@@ -75,6 +75,9 @@ def test_the_extra_sigma_is_kappa_times_the_visible_extent_per_cut_side() -> Non
     assert extra_sigma_px(mask, (0, 1), CFG) == (0.0, CFG.kappa * 60)
     sx, sy = extra_sigma_px(mask, (2, 0), CFG)
     assert np.isclose(sx, CFG.kappa * 20 * np.sqrt(2)) and sy == 0.0
+    assert extra_sigma_px(mask, (0, 1), CFG, 44.0) == (0.0, 22.0)  # half an occluder 44 px tall below
+    assert np.isclose(extra_sigma_px(mask, (0, 2), CFG, 44.0)[1], np.hypot(CFG.kappa * 60, 22.0))  # and the top
+    assert extra_sigma_px(mask, (1, 0), CFG, 44.0) == (CFG.kappa * 20, 0.0)  # no y side cut: no occluder term
 
 
 def test_a_corner_hidden_by_a_round_occluder_moves_the_centroid_along_the_cut_side() -> None:

@@ -235,10 +235,8 @@ class Pipeline:
         cut, (sx, sy) = cut_and_skew(mask[:n], (box[0], box[1], box[2], box[1] + n), self.rig.left.size,
                                      b.disparity, None if disp is None else disp[:n],
                                      None if valid is None else valid[:n], self.visibility)
-        px, py = extra_sigma_px(b.mask, cut, self.visibility) if any(cut) else (0.0, 0.0)
-        if cut[1] and (tall := occluder_below(mask, b.disparity, disp, valid, self.visibility)) is not None:
-            py *= float(np.sqrt((cut[1] - 1) / cut[1]))  # the bottom side's kappa term gives way to half that height
-            py = float(np.hypot(py, 0.5 * tall))
+        tall = occluder_below(mask, b.disparity, disp, valid, self.visibility) if cut[1] else None
+        px, py = extra_sigma_px(b.mask, cut, self.visibility, tall) if any(cut) else (0.0, 0.0)
         ux, uy = unseen_below(mask, b.disparity, disp, valid, self.visibility)
         return float(np.sqrt(px * px + sx * sx + ux * ux)), float(np.sqrt(py * py + sy * sy + uy * uy))
 

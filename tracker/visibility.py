@@ -202,11 +202,22 @@ def _sides(pixels: BoolA, centre: tuple[float, float], half: tuple[float, float]
     return [(ys[m], xs[m]) for m in (across & (dx < 0), across & (dx > 0), ~across & (dy < 0), ~across & (dy > 0))]
 
 
-def extra_sigma_px(mask: BoolA, cut: tuple[int, int], cfg: VisibilityConfig) -> tuple[float, float]:
+def extra_sigma_px(mask: BoolA, cut: tuple[int, int], cfg: VisibilityConfig, occluder_px: float | None = None
+                   ) -> tuple[float, float]:
     """The centroid's extra 1-σ (px) along x and y: kappa times the visible width / height for each cut
-    side (added in quadrature)."""
+    side (added in quadrature); with occluder_px (`occluder_below`, and a y side cut), one y side's term is
+    half the occluder's height instead."""
     _, _, bw, bh = cv2.boundingRect(mask.view(np.uint8))
-    return cfg.kappa * bw * float(np.sqrt(cut[0])), cfg.kappa * bh * float(np.sqrt(cut[1]))
+    sx = cfg.kappa * bw * float(np.sqrt(cut[0]))
+    if occluder_px is None or not cut[1]:
+        return sx, cfg.kappa * bh * float(np.sqrt(cut[1]))
+    return sx, float(np.hypot(cfg.kappa * bh * np.sqrt(cut[1] - 1), 0.5 * occluder_px))
+
+
+def _lowest_rows(mask: BoolA, by: int, bh: int, bx: int, bw: int) -> NDArray[np.intp]:
+    """Each column's lowest mask row over the mask's bounding rectangle (x bx, y by, bw x bh); a column
+    with none counts as reaching its bottom."""
+    return np.asarray(by + bh - 1 - np.argmax(mask[by:by + bh, bx:bx + bw][::-1], axis=0))
 
 
 def occluder_below(mask: BoolA, disparity: float, bg_disparity: F32 | None, bg_valid: BoolA | None,
@@ -227,8 +238,7 @@ def occluder_below(mask: BoolA, disparity: float, bg_disparity: F32 | None, bg_v
     bx, by, bw, bh = cv2.boundingRect(mask.view(np.uint8))
     if bw == 0:
         return None
-    m = mask[by:by + bh, bx:bx + bw]
-    low = by + bh - 1 - np.argmax(m[::-1], axis=0)  # each column's lowest mask row
+    low = _lowest_rows(mask, by, bh, bx, bw)
     nearer = bg_valid[:, bx:bx + bw] & (bg_disparity[:, bx:bx + bw] > disparity + cfg.nearer_px)
     rows = np.arange(h)[:, None]
     below = (rows > low) & (rows <= low + 3)  # the ring below, where the occluder's top must be
@@ -263,8 +273,7 @@ def unseen_below(mask: BoolA, disparity: float, bg_disparity: F32 | None, bg_val
     bx, by, bw, bh = cv2.boundingRect(mask.view(np.uint8))
     if bw == 0:
         return 0.0, 0.0
-    m = mask[by:by + bh, bx:bx + bw]  # the work is done over the mask's columns and the rows it may lose
-    low = by + bh - 1 - np.argmax(m[::-1], axis=0)  # each column's lowest mask row (every column has one)
+    low = _lowest_rows(mask, by, bh, bx, bw)  # the work is done over the mask's columns and the rows it may lose
     top, end = int(low.min()) + 1, min(by + 2 * bh + 1, h)
     if top >= end:
         return 0.0, 0.0
