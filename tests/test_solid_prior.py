@@ -1,6 +1,6 @@
 """A solid target's unseen depth (tracker.localize.SolidPrior): the centre is placed behind the seen face
-along the line of sight by ρ/2 times the smaller seen extent, and the range's 1-σ grows by σ_ρ/2 times it;
-the angles stay; without a prior (flat targets) nothing changes."""
+along the left camera's line of sight (the ray of eq. 10's centroid) by ρ/2 times the smaller seen extent, and
+the range's 1-σ grows by σ_ρ/2 times it; the angles stay; without a prior (flat targets) nothing changes."""
 
 from __future__ import annotations
 
@@ -26,15 +26,20 @@ def _pair(z_m: float, extent_px: tuple[float, float]):  # type: ignore[no-untype
 def test_the_centre_lies_behind_the_face_by_half_the_assumed_depth() -> None:
     flat, solid, rect = _pair(10.0, (60.0, 165.0))  # a person 0.6 x 1.65 m at 10 m: extent 0.6 m
     e = 60.0 * float(flat.rig[2]) / rect.f
-    c = 0.5 * (rect.rig.left.c + rect.rig.right.c)
+    c = rect.rig.left.c  # the centroid is measured in the left image: the centre stays on its ray
     moved = float(np.linalg.norm(solid.rig - c) - np.linalg.norm(flat.rig - c))
     assert math.isclose(moved, 0.25 * e, rel_tol=1e-9)
     u = (flat.rig - c) / np.linalg.norm(flat.rig - c)
     assert np.allclose(np.cross(solid.rig - flat.rig, u), 0.0, atol=1e-12)  # along the line of sight
+    mid = 0.5 * (rect.rig.left.c + rect.rig.right.c)  # not along the ray from the midpoint of the lenses
+    assert np.linalg.norm(np.cross(solid.rig - flat.rig, (flat.rig - mid) / np.linalg.norm(flat.rig - mid))) > 1e-4
     assert math.isclose(solid.sigma_r ** 2, flat.sigma_r ** 2 + (0.15 * e) ** 2, rel_tol=0.02)
     assert abs(solid.theta - flat.theta) < 1e-3 and abs(solid.phi - flat.phi) < 1e-3
-    # the same lateral spread a little farther, and the depth's spread seen about the origin by parallax
-    assert math.isclose(solid.sigma_theta, flat.sigma_theta, rel_tol=0.1)
+    # the same lateral spread a little farther, and the depth's spread along the left ray seen about the
+    # origin (midway between the lenses) by parallax: its share across the line of sight from there
+    o = solid.rig / np.linalg.norm(solid.rig)
+    across = 0.15 * e * float(np.linalg.norm(np.cross(u, o))) / float(np.linalg.norm(solid.rig))
+    assert math.isclose(solid.sigma_theta ** 2, flat.sigma_theta ** 2 + across ** 2, rel_tol=0.1)
 
 
 def test_the_smaller_extent_counts_and_no_extent_or_prior_changes_nothing() -> None:
