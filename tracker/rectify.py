@@ -89,6 +89,16 @@ class Rectifier:
             mx, my = mx[y0:y1, x0:x1], my[y0:y1, x0:x1]
         return np.asarray(cv2.remap(img, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE))
 
+    def right_at(self, box: tuple[int, int, int, int], d: float) -> tuple[F32, F32]:
+        """Raw right position (x, y; float32 (h, w)) of each pixel of a raw-left box (x0, y0, x1, y1) seen at
+        rectified disparity d (px): the right rectification map sampled at (x_rect - d, y_rect)."""
+        x0, y0, x1, y1 = box
+        rc = self.rect_of_raw[0][y0:y1, x0:x1]
+        qx, qy = rc[..., 0] - np.float32(d), np.ascontiguousarray(rc[..., 1])
+        ur = cv2.remap(self.maps[1][0], qx, qy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        vr = cv2.remap(self.maps[1][1], qx, qy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        return np.asarray(ur, np.float32), np.asarray(vr, np.float32)
+
     def rect_to_rig(self, x: float, y: float, d: float) -> F64:
         """Rectified left point (x, y) with disparity d (px) -> rig-frame point (3,) in metres.
 

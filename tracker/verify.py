@@ -23,6 +23,7 @@ from tracker.frames import StereoFrame
 from tracker.masks import NEAR, key_mask, largest_component, temporal_outline
 from tracker.rectify import Rectifier
 from tracker.regions import background_disparity, hints_around, mask_centroid, nearest_hint, row_thirds
+from tracker.rim import DEFAULT_RIM, RimConfig, RimRecovery
 from tracker.split import MIN_GAP_PX, MIN_GAP_REL, join, own_pixels, same_body
 from tracker.stereo import RegionMatch, match_region, refine_region
 
@@ -93,10 +94,12 @@ def _elsewhere(found: list[Blob], d: float) -> BoolA | None:
 class Verifier:
     """Turns candidate boxes into verified Blobs (or nothing)."""
 
-    def __init__(self, sub: StereoSubtractor, rect: Rectifier):
+    def __init__(self, sub: StereoSubtractor, rect: Rectifier, rim: RimConfig | None = DEFAULT_RIM):
+        """rim: how the outline's rim is recovered by stereo with the cameras still (None: it is not)."""
         self.sub = sub
         self.rect = rect
         self.cfg = sub.cfg
+        self.rim = None if rim is None else RimRecovery(rim, rect, sub.cfg.epsilon)
 
     def verify_all(self, frame: StereoFrame, box: Box, hints: F64 | None = None, max_objects: int = 3,
                    may_search: Callable[[], bool] | None = None) -> list[Blob]:
@@ -188,6 +191,9 @@ class Verifier:
         fine = self.match_object(frame, box, obj, d0, self.search_radius(d_hint))
         if fine is None:
             return None
+        if self.rim is not None and model is not None:  # cameras still: the rim eq. (9) and the model missed
+            obj = self.rim.recover(frame, box, cm, obj, fine.disparity, gain, model,
+                                   free if changed is None else free & ~changed)
         m8 = obj.view(np.uint8)
         area, c_box = mask_centroid(m8)
         c_raw = c_box + (x0, y0)  # eq. (10), c(i, j) = the object mask
@@ -307,11 +313,7 @@ class Verifier:
         """The right-key mask of eq. (9), sampled at the left box's pixels shifted by disparity d."""
         rect = self.rect
         x0, y0, x1, y1 = box
-        rc = rect.rect_of_raw[0][y0:y1, x0:x1]
-        # raw right position of each left pixel: the right rectification map sampled at (x_rect - d, y_rect)
-        qx, qy = rc[..., 0] - np.float32(d), np.ascontiguousarray(rc[..., 1])
-        ur = cv2.remap(rect.maps[1][0], qx, qy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-        vr = cv2.remap(rect.maps[1][1], qx, qy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        ur, vr = rect.right_at(box, d)
         w, h = rect.rig.right.size
         bx0, by0 = max(int(np.floor(ur.min())) - 1, 0), max(int(np.floor(vr.min())) - 1, 0)
         bx1, by1 = min(int(np.ceil(ur.max())) + 2, w), min(int(np.ceil(vr.max())) + 2, h)

@@ -1,0 +1,92 @@
+"""The outline's rim recovered by stereo (tracker.rim): a limb that looks like the background to eq. (9) and
+the temporal model joins the object; the outline is not fattened; other objects, moving background and
+pixels not allowed stay out."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tracker.rim import RimConfig, recover_rim
+
+H, W = 90, 120
+D_OBJ, D_BG = 12, 4  # px: the object's disparity and the background's
+
+
+def _texture(rng: np.random.Generator, mean: float, amp: float, shape: tuple[int, int] = (H, W + 40)) -> np.ndarray:
+    import cv2
+
+    t = cv2.GaussianBlur(rng.normal(0.0, 1.0, shape).astype(np.float32), (0, 0), 1.2)
+    return mean + amp * t / t.std()
+
+
+def _scene(limb_amp: float, seed: int = 0, textured: bool = True):  # type: ignore[no-untyped-def]
+    """A disc (radius 25 px) at disparity 12 px before a textured wall at 4 px, as the pictures recover_rim
+    compares: left Γ, the right image at the object's disparity and at the background's, and g B. The
+    disc's right crescent (its outer 4 px) looks like the wall behind it, off by a texture of its own of
+    amplitude limb_amp (grey levels, rms)."""
+    rng = np.random.default_rng(seed)
+    wall = _texture(rng, 110.0, 18.0)  # the wall in its own (right-image) columns, 40 spare columns
+    disc_tex = _texture(rng, 170.0, 25.0 if textured else 0.0)
+    limb_tex = _texture(rng, 0.0, limb_amp)
+    yy, xx = np.mgrid[0:H, 0:W]
+    r = np.hypot(xx - 60.0, yy - 45.0)
+    disc = r <= 25.0
+    limb = disc & (r > 21.0) & (xx > 60)
+    bg_left = wall[:, D_BG:D_BG + W]  # the wall as the left camera sees it: right column x - d_bg
+    obj_left = np.where(limb, bg_left + limb_tex[:, :W], disc_tex[:, :W])
+    noise = lambda: rng.normal(0.0, 1.5, (H, W))  # noqa: E731
+    left = np.where(disc, obj_left, bg_left) + noise()
+    # the right image at the object's disparity: the disc where it is, elsewhere the wall 8 px over
+    right_obj = np.where(disc, obj_left, wall[:, D_OBJ:D_OBJ + W]) + noise()
+    # at the background's disparity: the wall where the disc does not hide it from the right camera
+    shifted = np.zeros_like(disc)
+    shifted[:, :W - (D_OBJ - D_BG)] = disc[:, D_OBJ - D_BG:]
+    right_bg = np.where(shifted, np.roll(obj_left, -(D_OBJ - D_BG), axis=1), bg_left) + noise()
+    temporal = bg_left + noise()
+    u8 = lambda a: np.clip(a, 0, 255).astype(np.uint8)  # noqa: E731
+    return u8(left), u8(right_obj), u8(right_bg), u8(temporal), disc, limb
+
+
+def _missed(left: np.ndarray, temporal: np.ndarray, disc: np.ndarray, eps: int = 12) -> np.ndarray:
+    """What the temporal model keeps of the disc: the pixels unlike the background by more than ε."""
+    return disc & (np.abs(left.astype(int) - temporal.astype(int)) > eps)
+
+
+def test_a_limb_with_the_backgrounds_grey_joins_the_object() -> None:
+    """The disc's limb differs from the wall behind it by 10 grey levels rms: the temporal model keeps a
+    fifth of it; the rim recovers its inner part (the windows of its outer pixels that lie over the wall
+    match the wall better), and nothing beyond the disc."""
+    left, r_obj, r_bg, temporal, disc, limb = _scene(limb_amp=10.0)
+    obj = disc & ~limb
+    assert np.count_nonzero(_missed(left, temporal, disc) & limb) < 0.25 * np.count_nonzero(limb)
+    out = recover_rim(obj, left, r_obj, r_bg, temporal, np.ones_like(disc), RimConfig())
+    assert np.count_nonzero(out & limb) > 0.3 * np.count_nonzero(limb)
+    assert not np.any(out & ~disc)
+    cx = lambda m: float(np.nonzero(m)[1].mean())  # noqa: E731
+    before, after = abs(cx(obj) - cx(disc)), abs(cx(out) - cx(disc))  # 2.6 px -> 1.5 px
+    assert before > 2.0 and after < 0.7 * before
+
+
+@pytest.mark.parametrize("textured", [True, False])
+def test_a_whole_outline_is_not_fattened(textured: bool) -> None:
+    """A disc seen whole gains at most a few pixels: a centred window beside a bright disc matches the
+    disc's disparity better and would have added a ring of about its perimeter (157 px)."""
+    left, r_obj, r_bg, temporal, disc, _ = _scene(limb_amp=25.0, textured=textured)
+    out = recover_rim(disc, left, r_obj, r_bg, temporal, np.ones_like(disc), RimConfig())
+    assert np.count_nonzero(out & ~disc) <= 8
+    assert np.array_equal(out & disc, disc)
+
+
+def test_pixels_not_allowed_do_not_join() -> None:
+    left, r_obj, r_bg, temporal, disc, limb = _scene(limb_amp=10.0)
+    obj = disc & ~limb
+    allowed = np.ones_like(disc)
+    allowed[:45] = False  # another object's pixels, changed pixels, or a background that moves there
+    out = recover_rim(obj, left, r_obj, r_bg, temporal, allowed, RimConfig())
+    assert not np.any(out[:45] & ~obj[:45]) and np.any(out[45:] & limb[45:])
+
+
+def test_bad_window_is_refused() -> None:
+    with pytest.raises(ValueError, match="window_px must be odd"):
+        RimConfig(window_px=4)
