@@ -104,6 +104,8 @@ def test_origin_moves_the_spherical_coordinates() -> None:
 
 
 def test_targets_solid_puts_the_range_behind_the_seen_face() -> None:
+    from tracker.sim.rig import default_rig
+
     def run(targets: str) -> list[dict[str, float]]:
         out = tmeye("track", "--scenario", "walk:body", "--frames", "8", "--json", "--fast", "--targets", targets)
         assert out.returncode == 0, out.stderr
@@ -119,8 +121,8 @@ def test_targets_solid_puts_the_range_behind_the_seen_face() -> None:
         assert 0.05 < shift < 0.2
         assert abs((s["sigma_r"] ** 2 - f["sigma_r"] ** 2) ** 0.5 - 0.6 * shift) < 0.15 * 0.6 * shift
         # along the left camera's ray through the face point (eq. 10's centroid is the left image's);
-        # walk:body's cameras stay at home, so world = rig, the left lens centre at (-b/2, 0, 0)
-        c = np.array([-0.15, 0.0, 0.0])
+        # walk:body's cameras stay at home, so world = rig
+        c = default_rig().left.c
         u, v = np.array([f["x"], f["y"], f["z"]]) - c, np.array([s["x"], s["y"], s["z"]]) - c
         assert np.linalg.norm(np.cross(u, v)) / (np.linalg.norm(u) * np.linalg.norm(v)) < 2e-4
     bad = tmeye("track", "--targets", "round", "--frames", "1")

@@ -1,6 +1,7 @@
 """A solid target's unseen depth (tracker.localize.SolidPrior): the centre is placed behind the seen face
 along the left camera's line of sight (the ray of eq. 10's centroid) by ρ/2 times the smaller seen extent, and
-the range's 1-σ grows by σ_ρ/2 times it; the angles stay; without a prior (flat targets) nothing changes."""
+the range's 1-σ grows by σ_ρ/2 times it; the angles about the origin (midway between the lenses) move only by that
+shift's parallax; without a prior (flat targets) nothing changes."""
 
 from __future__ import annotations
 

@@ -25,8 +25,10 @@ windows over the background match better than it matches, so the outer pixel or 
 out: a disc's 4-px limb, 10 grey levels rms off the wall behind it, is recovered in part and its centroid
 error goes from 2.6 px to 1.5 px (tests/test_rim.py).
 
-With the cameras moving there is no temporal model. The stereo test alone then joined the warped
-background's misregistrations (pan: pixel F1 0.996 -> 0.948), so rim recovery runs only while the
+With the cameras moving there is no temporal model. The stereo test alone then joined the object's
+occlusion shadow, the background beside it that the right camera cannot see (d - d_bg px wide, wider
+than a window, so no window there matches the background in the right image): pan's pixel F1 0.996 ->
+0.948 and azimuth RMSE 0.013 -> 0.17°, with margin 2 or 5 alike. So rim recovery runs only while the
 cameras are still.
 """
 
@@ -59,9 +61,9 @@ class RimConfig:
     margin: int = 2
 
     def __post_init__(self) -> None:
-        if not (1 <= self.window_px <= 15 and self.window_px % 2 == 1) or self.band_px < 1:
-            raise ValueError(f"rim window_px must be odd in 1..15 and band_px >= 1, got {self.window_px}, "
-                             f"{self.band_px}")
+        if not (1 <= self.window_px <= 15 and self.window_px % 2 == 1) or self.band_px < 1 or self.margin < 0:
+            raise ValueError(f"rim window_px must be odd in 1..15, band_px >= 1 and margin >= 0, got "
+                             f"{self.window_px}, {self.band_px}, {self.margin}")
 
 
 def recover_rim(obj: BoolA, left: U8, right_obj: U8, right_bg: U8, temporal_bg: U8, allowed: BoolA,
