@@ -124,7 +124,11 @@ def test_goto_reaches_the_goal(server: Server, tokens: dict[str, str]) -> None:
         assert c.get("/api/status").json()["servo"]["mode"] == "manual"
         pan0 = c.get("/api/servo").json()["pan_deg"]
         assert c.post("/api/servo/jog", json={"pan_dps": -20, "tilt_dps": 0, "duration_s": 0.5}).status_code == 200
-        time.sleep(1.5)
+        # 20 deg/s for 0.5 s of source time: 10 deg, however late a loaded machine runs the frames
+        deadline = time.monotonic() + 10.0
+        while time.monotonic() < deadline and c.get("/api/servo").json()["pan_deg"] > pan0 - 8.5:
+            time.sleep(0.05)
+        time.sleep(1.0)  # and there it stops: the jog ended
         pan1 = c.get("/api/servo").json()["pan_deg"]
         assert pan1 == pytest.approx(pan0 - 10.0, abs=1.5)
         assert c.put("/api/servo/mode", json={"mode": "home"}).status_code == 200
