@@ -120,3 +120,27 @@ def test_short_evaluation_reports_every_field() -> None:
         assert k in rep
     assert rep["frames"] == 30 and rep["false_target_frames"] == 0
     assert float(rep["detection_rate"]) > 0.95  # type: ignore[arg-type]
+
+
+def test_a_new_object_left_out_by_the_budget_is_found_between_frames_and_verified_by_the_next() -> None:
+    """With no time at all in the frame for untracked boxes (budget 0), the search for a new object
+    waits for `between_frames`; the next frame verifies what it found from its position and disparity."""
+    sims = [SimRig(get_scenario("walk"), seed=0) for _ in range(3)]
+    pipes = [Pipeline(sims[0].rig), Pipeline(sims[1].rig, verify_budget_ms=0.0, between_frames=True),
+             Pipeline(sims[2].rig, verify_budget_ms=0.0, between_frames=True)]
+    for sim, pipe in zip(sims, pipes, strict=True):
+        pipe.learn_background(sim.background())
+    seen: list[list[int]] = [[], [], []]
+    for i in range(6):
+        frames = [sim.step().frame for sim in sims]
+        res = [pipe.step(f) for pipe, f in zip(pipes, frames, strict=True)]
+        pipes[1].between_frames(1e12)  # the third pipeline is never given the time between frames
+        for k, r in enumerate(res):
+            if r.detections:
+                seen[k].append(i)
+        if len(res[1].detections) == 1 and len(res[0].detections) == 1:
+            a, b = res[0].detections[0].blob, res[1].detections[0].blob
+            assert np.hypot(*(a.centroid_raw - b.centroid_raw)) < 0.05 and abs(a.disparity - b.disparity) < 0.02
+    assert seen[0] == [0, 1, 2, 3, 4, 5]  # without a budget: found at once
+    assert seen[1] == [1, 2, 3, 4, 5]  # searched between frames 0 and 1, verified in frame 1
+    assert seen[2] == []  # left out every frame

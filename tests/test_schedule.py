@@ -228,3 +228,58 @@ def test_terms_that_would_end_past_the_budget_by_their_last_cost_are_kept() -> N
     clock.t = 0.0025
     s.terms(2, 2, 0.0, work)  # a new track: worked out whatever it costs
     assert work.calls == 3
+
+
+def test_with_later_a_search_past_the_budget_waits_for_between_frames_and_backs_off_there() -> None:
+    clock = Clock(0.003)
+    s = VerifySchedule(1.0, clock, later=True)  # every frame is late by its first box
+    order, results, put_off = run(s, clock, [TRACKED, SMALL])
+    assert order == [TRACKED] and results == [TRACKED] and put_off == 1  # SMALL is not searched in the frame
+    assert s.take_later() == [SMALL] and s.take_later() == []  # but left for between frames, once
+
+    asked: list[bool] = []
+
+    def beside(b: Box, may_search: object = None) -> list[Box]:
+        clock.t += clock.cost
+        assert callable(may_search)
+        asked.append(bool(may_search()))
+        return [b]
+    offered: list[int] = []
+    for frame in range(1, 20):
+        clock.t = 0.0
+        s.run([TRACKED], HINTS, beside)
+        later = s.take_later()
+        if later:
+            assert later == [TRACKED]
+            offered.append(frame)
+            s.searched_later(TRACKED, found=False)  # searched between frames, in vain
+    assert not any(asked)  # never searched inside the frame
+    assert offered == [2, 4, 7, 12]  # put off in frame 1, then left for between frames after 0, 1, 2, 4 frames
+    for frame in (20, 21, 22):  # after 8 frames the next search; one that finds something ends the back-off
+        clock.t = 0.0
+        s.run([TRACKED], HINTS, beside)
+        assert s.take_later() == ([] if frame == 20 else [TRACKED])
+        s.searched_later(TRACKED, found=True)
+
+
+def test_terms_worked_out_between_frames_are_taken_by_the_next_frame_as_they_are() -> None:
+    clock = Clock(0.0)
+    s = SigmaSchedule(budget_ms=4.0, clock=clock)
+    work = Terms(clock, 0.001)
+    s.terms(1, 0, 0.0, work)  # a new track: worked out in the frame
+    assert not s.refresh(1, 0, 1.0, work)  # already of frame 0
+    assert s.refresh(1, 1, 1.0, work) and work.calls == 2  # frame 1's, between frames 1 and 2
+    between = s.terms(1, 2, 0.0, work)  # on time, but taken as they are: 1 frame old
+    assert work.calls == 2 and s.reused == 1 and s.refreshed == 1
+    assert between == SigmaTerms(0.02, (0.2, 0.4))
+    clock.t = 0.0
+    s.terms(1, 3, 0.0, work)  # 2 frames old and on time: worked out in the frame again
+    assert work.calls == 3
+    clock.t = 5.0
+    assert not s.refresh(1, 3, 5.0005, work)  # by their last cost (1 ms) they would end past the deadline
+    assert work.calls == 3
+    s2 = SigmaSchedule(None, clock=clock)  # no budget: every frame works them out, refreshed or not
+    s2.terms(1, 0, 0.0, work)
+    s2.refresh(1, 1, 100.0, work)
+    s2.terms(1, 2, 0.0, work)
+    assert work.calls == 6

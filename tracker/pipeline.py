@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from functools import partial
 
 import cv2
 import numpy as np
@@ -25,6 +26,7 @@ from tracker.geometry import StereoRig
 from tracker.localize import Localization, Localizer, SolidPrior
 from tracker.outline import OutlineConfig, warped_outline_sigma_px
 from tracker.rectify import Rectifier
+from tracker.regions import hints_inside
 from tracker.schedule import SigmaSchedule, SigmaTerms, VerifySchedule
 from tracker.segmentation import HeightHistory, outline_sigma_px
 from tracker.split import join_occluded, join_parts
@@ -82,7 +84,8 @@ class Pipeline:
     def __init__(self, rig: StereoRig, detector: DetectorConfig | None = None,
                  tracker: TrackerConfig | None = None, origin: F64 | None = None,
                  temporal: TemporalConfig | None = None, verify_budget_ms: float | None = None,
-                 sigma_budget_ms: float | None = None, solid: SolidPrior | None = None):
+                 sigma_budget_ms: float | None = None, solid: SolidPrior | None = None,
+                 between_frames: bool = False):
         """verify_budget_ms: in real time, candidate boxes that hold no track's prediction, and regions
         beside a tracked object that hold none, are verified only while the frame's step is younger than
         this (ms); the others wait for the next frame (tracker.schedule.VerifySchedule; None: all are
@@ -90,7 +93,8 @@ class Pipeline:
         tracked target's costly 1-σ terms are worked out afresh only when they would end within this many
         ms of the step's start, else taken from a recent frame (tracker.schedule.SigmaSchedule; None:
         every frame). solid: what is known of solid targets' unseen depth (tracker.localize.SolidPrior;
-        None: flat targets, the range is the seen face's)."""
+        None: flat targets, the range is the seen face's). between_frames: the caller calls
+        `between_frames` after each step, so the searches the budget leaves out wait for it."""
         self.rig = rig
         self.rect = Rectifier(rig)
         self.bg = BackgroundDepth(self.rect, near_m=(detector or DetectorConfig()).near_m)
@@ -101,12 +105,16 @@ class Pipeline:
         self.localizer = Localizer(self.rect, origin, centroid_sigma_px=0.0, solid=solid)
         self.tracker = MultiTracker(tracker)
         self.ego = PoseCompensation(rig.left)
-        self.schedule = VerifySchedule(verify_budget_ms)
+        self.schedule = VerifySchedule(verify_budget_ms, later=between_frames)
         self.sigma_schedule = SigmaSchedule(sigma_budget_ms)
         self.heights = HeightHistory()
         self.visibility = VisibilityConfig()
         self.outline = OutlineConfig()
         self._last_gain = 1.0
+        # the last frame, its objects, their track ids and the hints it was verified with (between_frames)
+        self._done: tuple[StereoFrame, list[Blob], list[int], F64] | None = None
+        self._found: F64 | None = None  # new objects found between frames: (N, 3) x, y, d as seen at home
+        self._search_ms = 5.0  # what a search between frames costs (a running mean)
         self.learner: StreamLearner | None = None
 
     def learn_background(self, frame: StereoFrame) -> int:
@@ -150,9 +158,10 @@ class Pipeline:
         hints = self.ego.from_home(self.tracker.predictions(frame.t), frame.gimbal)  # at this frame's pose
         # a track receding fast may be predicted past infinity (disparity <= 0): that narrows no search
         hints = hints[np.isfinite(hints).all(axis=1) & (hints[:, 2] > 0)]
-        boxes = cands.worth_verifying(self.subtractor.cfg.moving_min_cells, hints)
-        blobs, deferred = self.schedule.run(boxes, hints, lambda box, may_search: self.verifier.verify_all(
-            frame, box, hints, may_search=may_search), t0)
+        seek = self._with_found(hints, frame)  # and the new objects found between frames
+        boxes = cands.worth_verifying(self.subtractor.cfg.moving_min_cells, seek)
+        blobs, deferred = self.schedule.run(boxes, seek, lambda box, may_search: self.verifier.verify_all(
+            frame, box, seek, may_search=may_search), t0)
         blobs = join_parts(without_duplicates(blobs), self.rect.area_moments)  # one object again, or a part
         blobs = self.temporal.detect(frame, blobs, hints)  # cameras still: objects too near their background
         blobs = join_occluded(blobs, lambda box: self._background_disparity(frame, box),  # one body, two sides
@@ -165,6 +174,7 @@ class Pipeline:
         self.heights.keep_only([tr.track_id for tr in self.tracker.tracks])
         t_ids = time.perf_counter()
         locs = [self._locate(frame, b, blobs, i, t0) for b, i in zip(blobs, ids, strict=True)]
+        self._done = (frame, blobs, ids, seek)  # for `between_frames`
         t3 = time.perf_counter()
         self.subtractor.update_floor(self._foreground_low(blobs))
         gain = self.temporal.gain or (max(blobs, key=lambda b: b.area).gain if blobs else self._last_gain)
@@ -192,13 +202,43 @@ class Pipeline:
     def _locate(self, frame: StereoFrame, b: Blob, blobs: list[Blob], track_id: int, start: float) -> Localization:
         """eq. (1-2) for a blob, with its 1-σ: the matcher's, the costlier terms (SigmaTerms) and, every
         frame, a piece lost or gained at the outline's top or bottom (tracker.segmentation.HeightHistory)."""
-        terms = self.sigma_schedule.terms(track_id, frame.index, start, lambda: SigmaTerms(
-            self._disparity_sigma(frame, b), self._centroid_extra(frame, b, blobs)))
+        terms = self.sigma_schedule.terms(track_id, frame.index, start, lambda: self._sigma_terms(frame, b, blobs))
         _, _, w, h = cv2.boundingRect(b.mask.view(np.uint8))
         jump = self.heights.sigma_px(track_id, frame.index, float(h), b.disparity)
         cx, cy = terms.centroid_px
         return self.localizer.locate(b.centroid_rect, b.disparity, max(b.disparity_sigma, terms.disparity_px),
                                      b.area, frame.gimbal, (cx, float(np.hypot(cy, jump))), (float(w), float(h)))
+
+    def _sigma_terms(self, frame: StereoFrame, b: Blob, blobs: list[Blob]) -> SigmaTerms:
+        return SigmaTerms(self._disparity_sigma(frame, b), self._centroid_extra(frame, b, blobs))
+
+    def between_frames(self, deadline: float) -> None:
+        """In real time, after a frame's results are out and before the next frame is due (`deadline`,
+        time.perf_counter seconds): the searches for new objects the frame's budget left out
+        (VerifySchedule `later`), whose finds the next frame verifies as it does tracked objects, from
+        their position and disparity; then the tracked targets' costly 1-σ terms of the frame, for the
+        next frame to use (tracker.schedule.SigmaSchedule.refresh)."""
+        done, self._done = self._done, None
+        if done is None:
+            return
+        frame, blobs, ids, seek = done
+        found = []
+        for box in self.schedule.take_later():
+            if time.perf_counter() + self._search_ms * 1e-3 > deadline:
+                break
+            t = time.perf_counter()
+            new = [b for b in self.verifier.verify_all(frame, box, seek) if not _explained(b, seek, blobs)]
+            self._search_ms += 0.2 * ((time.perf_counter() - t) * 1e3 - self._search_ms)
+            self.schedule.searched_later(box, bool(new))
+            found += [[b.centroid_raw[0], b.centroid_raw[1], b.disparity] for b in new]
+        self._found = self.ego.to_home(np.array(found, np.float64), frame.gimbal) if found else None
+        for b, i in zip(blobs, ids, strict=True):
+            self.sigma_schedule.refresh(i, frame.index, deadline, partial(self._sigma_terms, frame, b, blobs))
+
+    def _with_found(self, hints: F64, frame: StereoFrame) -> F64:
+        """The hints and, once, the new objects found between frames, at this frame's pose."""
+        found, self._found = self._found, None
+        return hints if found is None else np.vstack([hints, self.ego.from_home(found, frame.gimbal)])
 
     def _disparity_sigma(self, frame: StereoFrame, b: Blob) -> float:
         """The scatter of the disparities of the blob's parts (px; tracker.disparity_sigma: correlated
@@ -251,3 +291,13 @@ class Pipeline:
             ly, lx = (y0 + s - 1) // s, (x0 + s - 1) // s
             low[ly:ly + sub.shape[0], lx:lx + sub.shape[1]] |= sub.astype(np.uint8)
         return low
+
+
+def _explained(b: Blob, hints: F64, blobs: list[Blob]) -> bool:
+    """Whether a blob found between frames is an object known already: a hint lies on it, or its centroid
+    lies on an object the frame found."""
+    if hints_inside(hints, b.mask, b.box):
+        return True
+    x, y = int(b.centroid_raw[0]), int(b.centroid_raw[1])
+    return any(o.box[0] <= x < o.box[2] and o.box[1] <= y < o.box[3] and o.mask[y - o.box[1], x - o.box[0]]
+               for o in blobs)

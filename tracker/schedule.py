@@ -92,10 +92,16 @@ class VerifySchedule:
 
     MAX_WAIT = 8
 
-    def __init__(self, budget_ms: float | None = None, clock: Callable[[], float] = time.perf_counter):
+    def __init__(self, budget_ms: float | None = None, clock: Callable[[], float] = time.perf_counter,
+                 later: bool = False):
+        """later: a search past the budget is not made in the frame but left for the time between frames
+        (`take_later`, `searched_later`): the frame's step then ends within about the budget but for the
+        boxes that hold predictions."""
         self.budget_ms = budget_ms
         self.clock = clock
+        self.later = later
         self._put_off: list[_PutOff] = []
+        self._later: list[Box] = []
 
     def _order(self, boxes: Sequence[Box], held: list[bool]) -> list[int]:
         """Indices of boxes in the order to verify them: holding a prediction (held), put off last frame,
@@ -118,6 +124,7 @@ class VerifySchedule:
             return [r for b in boxes for r in verify(b, None)], 0
         t0 = self.clock() if start is None else start
         fr = _Frame(t0 + self.budget_ms * 1e-3, self._put_off)
+        self._later = []
         done: dict[int, list[T]] = {}
         held = [holds_prediction(b, hints) for b in boxes]
         for i in self._order(boxes, held):
@@ -130,7 +137,7 @@ class VerifySchedule:
             elif self.clock() <= fr.deadline:
                 fr.passed["untracked"] = True  # the first untracked box, at least, is verified every frame
                 done[i] = verify(b, None)
-            elif fr.may_pass(b, "untracked", True):
+            elif fr.may_pass(b, "untracked", True) and not self._leave(b, fr):
                 done[i] = verify(b, None)
                 if not done[i]:
                     fr.in_vain(b)
@@ -148,12 +155,33 @@ class VerifySchedule:
         def ask() -> bool:
             if self.clock() <= fr.deadline:
                 return True
-            if fr.may_pass(box, "beside", False):
+            if fr.may_pass(box, "beside", False) and not self._leave(box, fr):
                 forced[0] = True
                 return True
             fr.put(box)
             return False
         return ask
+
+    def _leave(self, box: Box, fr: _Frame) -> bool:
+        """With `later`, a search past the budget is left for between frames (the box is put off)."""
+        if self.later:
+            self._later.append(box)
+            fr.put(box)
+        return self.later
+
+    def take_later(self) -> list[Box]:
+        """The searches the last frame left for between frames (at most one untracked box and one box
+        beside tracked objects), once."""
+        later, self._later = self._later, []
+        return later
+
+    def searched_later(self, box: Box, found: bool) -> None:
+        """A search left for between frames was made: one that found nothing backs the box off as a
+        search past the budget in vain does; one that found something ends its back-off."""
+        p = next((p for p in self._put_off if p.box == box), None)
+        if p is not None:
+            p.strikes = 0 if found else p.strikes + 1
+            p.wait = 0 if found else min(2 ** (p.strikes - 1), self.MAX_WAIT)
 
 
 @dataclass(frozen=True)
@@ -177,15 +205,21 @@ class SigmaSchedule:
     or for a new track, they are always worked out. So a target whose own verification takes the whole
     budget every frame (a near person, while the mount turns) has its terms worked out once in 15 to 30
     frames, in the least busy of those frames rather than in whichever comes 16th. budget_ms None: always
-    worked out (evaluations, offline)."""
+    worked out (evaluations, offline).
+
+    Between frames (`refresh`, in the time left before the next frame is due) the terms of the frame just
+    done are worked out for each tracked target; a frame takes those of the frame before as they are, so
+    that their cost leaves the step altogether while they stay one frame old."""
 
     def __init__(self, budget_ms: float | None = None, max_age: int = 15,
                  clock: Callable[[], float] = time.perf_counter):
         self.budget_ms = budget_ms
         self.max_age = max_age
         self.clock = clock
-        self._kept: dict[int, tuple[int, SigmaTerms, float]] = {}  # track id -> (frame index, terms, cost ms)
+        # track id -> (frame index, terms, cost ms, worked out between frames)
+        self._kept: dict[int, tuple[int, SigmaTerms, float, bool]] = {}
         self.reused = 0  # terms taken from an earlier frame (counted for the status)
+        self.refreshed = 0  # terms worked out between frames (`refresh`)
 
     def terms(self, track_id: int, index: int, start: float, work: Callable[[], SigmaTerms]) -> SigmaTerms:
         """The track's terms at frame `index`: work() when due, else those kept. start: the step's start
@@ -193,13 +227,26 @@ class SigmaSchedule:
         kept = self._kept.get(track_id)
         now = self.clock()
         age = index - kept[0] if kept is not None else -1
-        if (self.budget_ms is not None and kept is not None and 0 <= age < 2 * self.max_age
-                and (now - start) * 1e3 + kept[2] > self.budget_ms * max(1.0, age / self.max_age)):
+        if self.budget_ms is not None and kept is not None and (
+                (age == 1 and kept[3]) or (0 <= age < 2 * self.max_age and (now - start) * 1e3 + kept[2]
+                                           > self.budget_ms * max(1.0, age / self.max_age))):
             self.reused += 1
             return kept[1]
         got = work()
-        self._kept[track_id] = (index, got, (self.clock() - now) * 1e3)
+        self._kept[track_id] = (index, got, (self.clock() - now) * 1e3, False)
         return got
+
+    def refresh(self, track_id: int, index: int, deadline: float, work: Callable[[], SigmaTerms]) -> bool:
+        """Between frames: work out the track's terms of frame `index` (just done) if they are older and,
+        by what they cost the last time, would end by `deadline` (clock seconds). Returns whether it did."""
+        kept = self._kept.get(track_id)
+        now = self.clock()
+        if kept is not None and (kept[0] >= index or now + kept[2] * 1e-3 > deadline):
+            return False
+        got = work()
+        self._kept[track_id] = (index, got, (self.clock() - now) * 1e3, True)
+        self.refreshed += 1
+        return True
 
     def keep_only(self, track_ids: Sequence[int]) -> None:
         """Forget the terms of tracks not in track_ids (ended)."""

@@ -79,7 +79,8 @@ def pipeline(rig: StereoRig, cfg: RuntimeConfig, tuning: TrackerTuning, fps: flo
     with rig_errors(cfg):
         return Pipeline(rig, replace(tuning.detector, fps=fps), tuning.tracks, origin=np.array(cfg.origin, float),
                         verify_budget_ms=cfg.verify_budget_ms if cfg.realtime else None,
-                        sigma_budget_ms=cfg.sigma_budget_ms if cfg.realtime else None, solid=solid_prior(cfg))
+                        sigma_budget_ms=cfg.sigma_budget_ms if cfg.realtime else None, solid=solid_prior(cfg),
+                        between_frames=cfg.realtime)  # the worker's time between frames (Runtime._between_frames)
 
 
 def solid_prior(cfg: RuntimeConfig) -> SolidPrior | None:

@@ -39,6 +39,10 @@ from tracker.pipeline import FrameResult
 
 log = logging.getLogger("tmeye.runtime")
 R = TypeVar("R")
+BETWEEN_FRAMES_MARGIN_S = 0.004  # work between frames ends this long before the next frame is due
+# ... and starts this long after the frame is published: the telemetry WebSockets send it meanwhile, on
+# the event loop, without this thread's Python code taking the interpreter's lock between theirs
+BETWEEN_FRAMES_DELAY_S = 0.003
 
 
 @dataclass(frozen=True)
@@ -235,6 +239,7 @@ class Runtime:
                     break
                 if period:
                     k += 1
+                    self._between_frames(t0 + k * period)
                     late = time.monotonic() - (t0 + k * period)
                     if late < 0:
                         self._stop.wait(-late)
@@ -311,6 +316,20 @@ class Runtime:
         if step is not None:
             tm["latency_ms"] = round(step.latency_ms, 3)
         return FrameEvent(frame_no, frame, res, step, servo, captured_at, time.time(), tm, self.generation)
+
+    def _between_frames(self, due: float) -> None:
+        """Work the pipeline does for the frame just published in the time before the next one is due
+        (`due`, time.monotonic s; Pipeline.between_frames), ending BETWEEN_FRAMES_MARGIN_S before it."""
+        assert self.comp is not None
+        if due - time.monotonic() - BETWEEN_FRAMES_MARGIN_S <= BETWEEN_FRAMES_DELAY_S:
+            return
+        self._stop.wait(BETWEEN_FRAMES_DELAY_S)
+        left = due - time.monotonic() - BETWEEN_FRAMES_MARGIN_S
+        if left > 0 and not self._stop.is_set():
+            try:
+                self.comp.pipeline.between_frames(time.perf_counter() + left)
+            except Exception:  # a bug: logged; the next frame is processed all the same
+                log.warning("work between frames failed", exc_info=True)
 
     def _servo_state(self, step: LoopStep | None) -> ServoState | None:
         if step is None or self.servo is None:
