@@ -239,3 +239,17 @@ def describe_source(c: Composition) -> dict[str, Any]:
     else:
         out["inputs"] = list(c.config.inputs)
     return out
+
+
+def apply_tuning(comp: Composition, tuning: TrackerTuning) -> None:
+    """New tracker settings, in the worker between frames: the detector, the tracks' and the aim's."""
+    pipe = comp.pipeline
+    det = replace(tuning.detector, fps=pipe.subtractor.cfg.fps, stride=pipe.subtractor.cfg.stride)
+    pipe.subtractor.reconfigure(det)
+    pipe.tracker.cfg = tuning.tracks
+    if comp.controller is not None:
+        old = comp.controller.config
+        comp.controller.config = replace(tuning.aim, frame_width_px=old.frame_width_px, focal_px=old.focal_px,
+                                         pan_limits=old.pan_limits, tilt_limits=old.tilt_limits)
+
+

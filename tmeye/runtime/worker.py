@@ -20,11 +20,11 @@ import threading
 import time
 from collections.abc import Callable
 from concurrent.futures import Future
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from functools import cached_property
 from typing import Any, TypeVar
 
-from tmeye.runtime.compose import Composition, compose, describe_source, rebuild_pipeline
+from tmeye.runtime.compose import Composition, apply_tuning, compose, describe_source, rebuild_pipeline
 from tmeye.runtime.config import RuntimeConfig, TrackerTuning
 from tmeye.runtime.faults import SourceHealth
 from tmeye.runtime.pointing import pixel_angles
@@ -165,7 +165,7 @@ class Runtime:
     def set_tuning(self, tuning: TrackerTuning) -> Future[None]:
         def apply() -> None:
             assert self.comp is not None
-            _apply_tuning(self.comp, tuning)
+            apply_tuning(self.comp, tuning)
             self.tuning = tuning
         return self.submit(apply)
 
@@ -413,16 +413,3 @@ class Runtime:
 
 class NoServoError(RuntimeError):
     """A servo request while the runtime drives no mount."""
-
-
-def _apply_tuning(comp: Composition, tuning: TrackerTuning) -> None:
-    pipe = comp.pipeline
-    det = replace(tuning.detector, fps=pipe.subtractor.cfg.fps, stride=pipe.subtractor.cfg.stride)
-    pipe.subtractor.reconfigure(det)
-    pipe.tracker.cfg = tuning.tracks
-    if comp.controller is not None:
-        old = comp.controller.config
-        comp.controller.config = replace(tuning.aim, frame_width_px=old.frame_width_px, focal_px=old.focal_px,
-                                         pan_limits=old.pan_limits, tilt_limits=old.tilt_limits)
-
-
