@@ -1,5 +1,7 @@
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import pytest
 
@@ -124,23 +126,31 @@ def test_short_evaluation_reports_every_field() -> None:
 
 def test_a_new_object_left_out_by_the_budget_is_found_between_frames_and_verified_by_the_next() -> None:
     """With no time at all in the frame for untracked boxes (budget 0), the search for a new object
-    waits for `between_frames`; the next frame verifies what it found from its position and disparity."""
-    sims = [SimRig(get_scenario("walk"), seed=0) for _ in range(3)]
-    pipes = [Pipeline(sims[0].rig), Pipeline(sims[1].rig, verify_budget_ms=0.0, between_frames=True),
-             Pipeline(sims[2].rig, verify_budget_ms=0.0, between_frames=True)]
+    waits for `between_frames`; the next frame verifies what it found from its position and disparity.
+    Searches not made between frames (never called, or no time left) are made by the next frame itself."""
+    sims = [SimRig(get_scenario("walk"), seed=0) for _ in range(4)]
+    pipes = [Pipeline(sims[0].rig)] + [Pipeline(sim.rig, verify_budget_ms=0.0, sigma_budget_ms=0.0,
+                                                between_frames=True) for sim in sims[1:]]
     for sim, pipe in zip(sims, pipes, strict=True):
         pipe.learn_background(sim.background())
-    seen: list[list[int]] = [[], [], []]
+    seen: list[list[int]] = [[], [], [], []]
+    left: list[list[int]] = [[], [], [], []]  # searches each frame left for between frames
     for i in range(6):
         frames = [sim.step().frame for sim in sims]
         res = [pipe.step(f) for pipe, f in zip(pipes, frames, strict=True)]
-        pipes[1].between_frames(1e12)  # the third pipeline is never given the time between frames
+        for k, pipe in enumerate(pipes):
+            left[k].append(len(pipe.schedule._later))
+        pipes[1].between_frames(time.perf_counter() + 60.0)
+        pipes[3].between_frames(time.perf_counter())  # no time: nothing is searched, the next frame does it
         for k, r in enumerate(res):
             if r.detections:
                 seen[k].append(i)
         if len(res[1].detections) == 1 and len(res[0].detections) == 1:
             a, b = res[0].detections[0].blob, res[1].detections[0].blob
             assert np.hypot(*(a.centroid_raw - b.centroid_raw)) < 0.05 and abs(a.disparity - b.disparity) < 0.02
+            assert pipes[1].sigma_schedule.refreshed >= i - 1  # the 1-σ terms too, once tracked
     assert seen[0] == [0, 1, 2, 3, 4, 5]  # without a budget: found at once
-    assert seen[1] == [1, 2, 3, 4, 5]  # searched between frames 0 and 1, verified in frame 1
-    assert seen[2] == []  # left out every frame
+    assert seen[1] == [1, 2, 3, 4, 5] and left[1][:2] == [1, 0]  # searched between frames 0 and 1
+    assert seen[2] == seen[3] == [1, 2, 3, 4, 5]  # searched in frame 1, the search left by frame 0 not made
+    assert left[2][:2] == left[3][:2] == [1, 0]
+    assert pipes[1].sigma_schedule.refreshed >= 3 and pipes[2].sigma_schedule.refreshed == 0

@@ -175,6 +175,26 @@ def test_the_verify_and_sigma_budgets_apply_in_real_time_only() -> None:
         assert rt.status()["reused_sigma"] >= 0
 
 
+def test_in_real_time_the_worker_gives_the_pipeline_the_time_between_frames() -> None:
+    for realtime in (True, False):
+        rt = Runtime(RuntimeConfig(scenario="walk", servo=None, realtime=realtime, loop_source=True,
+                                   max_frames=None if realtime else 40, verify_budget_ms=2.0, sigma_budget_ms=3.0))
+        rt.start()
+        try:
+            assert rt.comp is not None
+            pipe = rt.comp.pipeline
+            deadline = time.monotonic() + 20.0
+            while pipe.sigma_schedule.refreshed < 10 and rt.running and time.monotonic() < deadline:
+                time.sleep(0.1)
+            if not realtime:
+                rt.join(20.0)  # 40 frames as fast as they go
+            assert pipe.schedule.later is realtime
+            # the walker tracked, its 1-σ terms worked out between frames in real time only
+            assert (pipe.sigma_schedule.refreshed >= 10) is realtime
+        finally:
+            rt.stop()
+
+
 def test_tuning_applies_from_the_next_frame_and_rejects_bad_fields() -> None:
     rt = Runtime(RuntimeConfig(scenario="walk", servo=None, realtime=True))
     rt.start()

@@ -255,11 +255,24 @@ def test_with_later_a_search_past_the_budget_waits_for_between_frames_and_backs_
             s.searched_later(TRACKED, found=False)  # searched between frames, in vain
     assert not any(asked)  # never searched inside the frame
     assert offered == [2, 4, 7, 12]  # put off in frame 1, then left for between frames after 0, 1, 2, 4 frames
-    for frame in (20, 21, 22):  # after 8 frames the next search; one that finds something ends the back-off
-        clock.t = 0.0
-        s.run([TRACKED], HINTS, beside)
-        assert s.take_later() == ([] if frame == 20 else [TRACKED])
-        s.searched_later(TRACKED, found=True)
+    clock.t = 0.0
+    s.run([TRACKED], HINTS, beside)  # frame 20: still waiting
+    assert s.take_later() == []
+    clock.t = 0.0
+    s.run([TRACKED], HINTS, beside)  # frame 21: after 8 frames, the next search
+    assert s.take_later() == [TRACKED]
+    s.searched_later(TRACKED, found=True)  # it finds something: no back-off, the next frame may leave one
+    clock.t = 0.0
+    s.run([TRACKED], HINTS, beside)
+    assert s.take_later() == [TRACKED] and not any(asked)
+
+    taken = s.take_later()  # nothing left now; a search taken for between frames but not made ...
+    clock.t = 0.0
+    s.run([TRACKED], HINTS, beside)
+    s.not_made(s.take_later())
+    clock.t = 0.0
+    s.run([TRACKED], HINTS, beside)  # ... is made by the next frame itself
+    assert taken == [] and asked[-1] is True and s.take_later() == []
 
 
 def test_terms_worked_out_between_frames_are_taken_by_the_next_frame_as_they_are() -> None:
@@ -278,8 +291,8 @@ def test_terms_worked_out_between_frames_are_taken_by_the_next_frame_as_they_are
     clock.t = 5.0
     assert not s.refresh(1, 3, 5.0005, work)  # by their last cost (1 ms) they would end past the deadline
     assert work.calls == 3
-    s2 = SigmaSchedule(None, clock=clock)  # no budget: every frame works them out, refreshed or not
+    s2 = SigmaSchedule(None, clock=clock)  # no budget: every frame works them out, none between frames
     s2.terms(1, 0, 0.0, work)
-    s2.refresh(1, 1, 100.0, work)
+    assert not s2.refresh(1, 1, 100.0, work)
     s2.terms(1, 2, 0.0, work)
-    assert work.calls == 6
+    assert work.calls == 5 and s2.refreshed == 0

@@ -111,9 +111,10 @@ class Pipeline:
         self.visibility = VisibilityConfig()
         self.outline = OutlineConfig()
         self._last_gain = 1.0
-        # the last frame, its objects, their track ids and the hints it was verified with (between_frames)
-        self._done: tuple[StereoFrame, list[Blob], list[int], F64] | None = None
-        self._found: F64 | None = None  # new objects found between frames: (N, 3) x, y, d as seen at home
+        # the last frame, its objects, their track ids, its tracks' hints and all it was verified with
+        self._done: tuple[StereoFrame, list[Blob], list[int], F64, F64] | None = None
+        # new objects found between frames: the index of the frame they are for, (N, 3) x, y, d seen at home
+        self._found: tuple[int, F64] | None = None
         self._search_ms = 5.0  # what a search between frames costs (a running mean)
         self.learner: StreamLearner | None = None
 
@@ -152,6 +153,7 @@ class Pipeline:
 
     def step(self, frame: StereoFrame) -> FrameResult:
         ms: dict[str, float] = {}
+        self._done = None  # a frame that raises leaves nothing for between_frames
         t0 = time.perf_counter()
         cands = self.subtractor.step(frame)
         t1 = time.perf_counter()
@@ -174,7 +176,7 @@ class Pipeline:
         self.heights.keep_only([tr.track_id for tr in self.tracker.tracks])
         t_ids = time.perf_counter()
         locs = [self._locate(frame, b, blobs, i, t0) for b, i in zip(blobs, ids, strict=True)]
-        self._done = (frame, blobs, ids, seek)  # for `between_frames`
+        self._done = (frame, blobs, ids, hints, seek)  # for `between_frames`
         t3 = time.perf_counter()
         self.subtractor.update_floor(self._foreground_low(blobs))
         gain = self.temporal.gain or (max(blobs, key=lambda b: b.area).gain if blobs else self._last_gain)
@@ -221,24 +223,31 @@ class Pipeline:
         done, self._done = self._done, None
         if done is None:
             return
-        frame, blobs, ids, seek = done
+        frame, blobs, ids, hints, seek = done
         found = []
-        for box in self.schedule.take_later():
+        later = self.schedule.take_later()
+        for k, box in enumerate(later):
             if time.perf_counter() + self._search_ms * 1e-3 > deadline:
+                self._search_ms *= 0.7  # a cost once high is not held against every later window
+                self.schedule.not_made(later[k:])
                 break
             t = time.perf_counter()
-            new = [b for b in self.verifier.verify_all(frame, box, seek) if not _explained(b, seek, blobs)]
+            new = [b for b in self.verifier.verify_all(frame, box, seek) if not _explained(b, hints, blobs)]
             self._search_ms += 0.2 * ((time.perf_counter() - t) * 1e3 - self._search_ms)
             self.schedule.searched_later(box, bool(new))
             found += [[b.centroid_raw[0], b.centroid_raw[1], b.disparity] for b in new]
-        self._found = self.ego.to_home(np.array(found, np.float64), frame.gimbal) if found else None
+        if found:  # for the next frame only
+            self._found = (frame.index + 1, self.ego.to_home(np.array(found, np.float64), frame.gimbal))
         for b, i in zip(blobs, ids, strict=True):
             self.sigma_schedule.refresh(i, frame.index, deadline, partial(self._sigma_terms, frame, b, blobs))
 
     def _with_found(self, hints: F64, frame: StereoFrame) -> F64:
-        """The hints and, once, the new objects found between frames, at this frame's pose."""
+        """The hints and the new objects found between the frame before and this one, at this frame's
+        pose (not after frames skipped, a source fault or a rewind: where they were says little then)."""
         found, self._found = self._found, None
-        return hints if found is None else np.vstack([hints, self.ego.from_home(found, frame.gimbal)])
+        if found is None or found[0] != frame.index:
+            return hints
+        return np.vstack([hints, self.ego.from_home(found[1], frame.gimbal)])
 
     def _disparity_sigma(self, frame: StereoFrame, b: Blob) -> float:
         """The scatter of the disparities of the blob's parts (px; tracker.disparity_sigma: correlated

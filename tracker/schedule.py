@@ -102,6 +102,7 @@ class VerifySchedule:
         self.later = later
         self._put_off: list[_PutOff] = []
         self._later: list[Box] = []
+        self._missed = False  # the searches left for between frames last time were not all made
 
     def _order(self, boxes: Sequence[Box], held: list[bool]) -> list[int]:
         """Indices of boxes in the order to verify them: holding a prediction (held), put off last frame,
@@ -124,7 +125,7 @@ class VerifySchedule:
             return [r for b in boxes for r in verify(b, None)], 0
         t0 = self.clock() if start is None else start
         fr = _Frame(t0 + self.budget_ms * 1e-3, self._put_off)
-        self._later = []
+        self._missed, self._later = bool(self._later), []
         done: dict[int, list[T]] = {}
         held = [holds_prediction(b, hints) for b in boxes]
         for i in self._order(boxes, held):
@@ -163,17 +164,23 @@ class VerifySchedule:
         return ask
 
     def _leave(self, box: Box, fr: _Frame) -> bool:
-        """With `later`, a search past the budget is left for between frames (the box is put off)."""
-        if self.later:
+        """With `later`, a search past the budget is left for between frames (the box is put off), unless
+        those left the frame before were not all made (no time between frames): then it is made now."""
+        leave = self.later and not self._missed
+        if leave:
             self._later.append(box)
             fr.put(box)
-        return self.later
+        return leave
 
     def take_later(self) -> list[Box]:
         """The searches the last frame left for between frames (at most one untracked box and one box
-        beside tracked objects), once."""
+        beside tracked objects), once. Those not made must be handed back (`not_made`)."""
         later, self._later = self._later, []
         return later
+
+    def not_made(self, boxes: Sequence[Box]) -> None:
+        """Searches taken for between frames but not made: the next frame makes its searches itself."""
+        self._later.extend(boxes)
 
     def searched_later(self, box: Box, found: bool) -> None:
         """A search left for between frames was made: one that found nothing backs the box off as a
@@ -241,8 +248,8 @@ class SigmaSchedule:
         by what they cost the last time, would end by `deadline` (clock seconds). Returns whether it did."""
         kept = self._kept.get(track_id)
         now = self.clock()
-        if kept is not None and (kept[0] >= index or now + kept[2] * 1e-3 > deadline):
-            return False
+        if self.budget_ms is None or (kept is not None and (kept[0] >= index or now + kept[2] * 1e-3 > deadline)):
+            return False  # without a budget every frame works them out itself
         got = work()
         self._kept[track_id] = (index, got, (self.clock() - now) * 1e3, True)
         self.refreshed += 1
