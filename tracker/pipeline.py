@@ -305,8 +305,5 @@ class Pipeline:
 def _explained(b: Blob, hints: F64, blobs: list[Blob]) -> bool:
     """Whether a blob found between frames is an object known already: a hint lies on it, or its centroid
     lies on an object the frame found."""
-    if hints_inside(hints, b.mask, b.box):
-        return True
-    x, y = int(b.centroid_raw[0]), int(b.centroid_raw[1])
-    return any(o.box[0] <= x < o.box[2] and o.box[1] <= y < o.box[3] and o.mask[y - o.box[1], x - o.box[0]]
-               for o in blobs)
+    centroid = b.centroid_raw[None, :]
+    return bool(hints_inside(hints, b.mask, b.box)) or any(hints_inside(centroid, o.mask, o.box) for o in blobs)

@@ -191,9 +191,9 @@ class Verifier:
         fine = self.match_object(frame, box, obj, d0, self.search_radius(d_hint))
         if fine is None:
             return None
-        if self.rim is not None and model is not None:  # cameras still: the rim eq. (9) and the model missed
-            obj = self.rim.recover(frame, box, cm, obj, fine.disparity, gain, model,
-                                   free if changed is None else free & ~changed)
+        if self.rim is not None and model is not None and changed is not None:  # cameras still (the model
+            # drew the outline, so `changed` is known): the rim eq. (9) and the model missed
+            obj = self.rim.recover(frame, box, cm, obj, fine.disparity, gain, model, free & ~changed)
         m8 = obj.view(np.uint8)
         area, c_box = mask_centroid(m8)
         c_raw = c_box + (x0, y0)  # eq. (10), c(i, j) = the object mask

@@ -251,5 +251,3 @@ def apply_tuning(comp: Composition, tuning: TrackerTuning) -> None:
         old = comp.controller.config
         comp.controller.config = replace(tuning.aim, frame_width_px=old.frame_width_px, focal_px=old.focal_px,
                                          pan_limits=old.pan_limits, tilt_limits=old.tilt_limits)
-
-
