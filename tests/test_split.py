@@ -98,6 +98,22 @@ def test_a_head_past_the_necks_gap_is_part_of_the_body_a_farther_or_distant_regi
     assert not same_body(far_off, 20.0, torso, 20.0)
 
 
+def test_a_head_further_above_a_torso_that_lost_its_shoulders_middle_is_part_of_it_a_neighbour_is_not() -> None:
+    # pan:body frame 62: the outline lost the middle of the shoulders, the head 7 rows above what was left
+    torso = np.zeros((120, 100), bool)
+    torso[30:120, 20:80] = True  # 90 rows: sideways max(3, 0.03 x 90) = 3 px, up and down 0.1 x 90 = 9 px
+    torso[30:40, 35:65] = False  # the shoulders' middle lost
+    head = np.zeros_like(torso)
+    head[15:33, 42:58] = True  # its lowest row 7 rows above the torso's, in the torso's columns
+    assert same_body(torso, 20.0, head, 20.2) and same_body(head, 20.2, torso, 20.0)
+    lower = torso.copy()
+    lower[30:45, 35:65] = False  # 12 rows below the head: more than 9
+    assert not same_body(lower, 20.0, head, 20.2)
+    beside = np.zeros_like(torso)
+    beside[40:100, 84:96] = True  # another body 4 px to the side, at the same depth
+    assert not same_body(torso, 20.0, beside, 20.0)
+
+
 def test_a_new_region_that_matches_nowhere_whole_is_searched_by_thirds(monkeypatch: pytest.MonkeyPatch) -> None:
     from tracker import verify
 

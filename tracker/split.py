@@ -91,13 +91,18 @@ def own_pixels(rect: Rectifier, frame: StereoFrame, box: Box, obj: BoolA, d: flo
 # PART_GAP_REL x the larger part's height))
 PART_GAP_MIN_PX = 3
 PART_GAP_REL = 0.03
+# and straight above or below, this much of it: a head over a torso whose outline lost the middle of its
+# shoulders (a person's neck and collar close to the background's grey), pan:body frame 62: 7.6 px apart
+# at 89 rows, the head then reported as a target of its own with the torso's centroid 50 px below it
+PART_STACK_REL = 0.1
 
 
 def same_body(a: BoolA, d_a: float, b: BoolA, d_b: float) -> bool:
     """Whether region b (box pixels, disparity d_b px) is a part of the body of region a (d_a): their
     disparities differ by less than the rival gap of own_pixels (max(MIN_GAP_PX, MIN_GAP_REL d)) and b lies
-    within max(PART_GAP_MIN_PX, PART_GAP_REL h) px of a, h the rows the taller of the two spans, whichever
-    was found first (a head verified before its body is as much a part of it as after)."""
+    within max(PART_GAP_MIN_PX, PART_GAP_REL h) px of a, or as far sideways and PART_STACK_REL h rows
+    above or below it, h the rows the taller of the two spans, whichever was found first (a head verified
+    before its body is as much a part of it as after)."""
     if abs(d_a - d_b) >= max(MIN_GAP_PX, MIN_GAP_REL * max(d_a, d_b)):
         return False
     rows, rows_b = np.flatnonzero(a.any(axis=1)), np.flatnonzero(b.any(axis=1))
@@ -106,6 +111,9 @@ def same_body(a: BoolA, d_a: float, b: BoolA, d_b: float) -> bool:
     h = max(rows[-1] - rows[0] + 1, rows_b[-1] - rows_b[0] + 1)
     gap = max(PART_GAP_MIN_PX, int(round(PART_GAP_REL * h)))
     k = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * gap + 1, 2 * gap + 1))
+    if np.any((cv2.dilate(a.view(np.uint8), k) > 0) & b):
+        return True
+    k = np.ones((2 * max(gap, int(round(PART_STACK_REL * h))) + 1, 2 * gap + 1), np.uint8)  # up and down further
     return bool(np.any((cv2.dilate(a.view(np.uint8), k) > 0) & b))
 
 
@@ -203,8 +211,9 @@ def _parts_of_one(a: Blob, b: Blob) -> bool:
     if a.area < b.area:
         a, b = b, a
     gap = max(PART_GAP_MIN_PX, int(round(PART_GAP_REL * a.mask.shape[0]))) + 1
-    if (b.box[0] > a.box[2] + gap or a.box[0] > b.box[2] + gap or b.box[1] > a.box[3] + gap
-            or a.box[1] > b.box[3] + gap):
+    stack = max(gap, int(round(PART_STACK_REL * a.mask.shape[0])) + 1)
+    if (b.box[0] > a.box[2] + gap or a.box[0] > b.box[2] + gap or b.box[1] > a.box[3] + stack
+            or a.box[1] > b.box[3] + stack):
         return False
     box = _union(a.box, b.box)
     return same_body(_painted(a, box), a.disparity, _painted(b, box), b.disparity)
