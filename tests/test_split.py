@@ -194,6 +194,22 @@ def test_one_body_seen_on_both_sides_of_a_nearer_post_is_joined() -> None:
                              moments)) == 2  # the gap is most of the union's width
 
 
+def test_the_columns_a_post_hides_from_the_right_camera_count_as_the_posts() -> None:
+    # occlusion:body's start-up: the car's two sides 31 px apart, the post (d 19.6) 18 px of the gap, the
+    # 4 px right of it hidden from the right camera (the car at 15.8 px), the rest far background
+    yy, xx = np.mgrid[0:H, 0:W].astype(np.float64)
+    moments = np.dstack([xx, yy, np.ones_like(xx)])
+    left, right = _blob((0, 100, 55, 160), 15.8), _blob((86, 100, 140, 160), 14.4)
+
+    def post_in_gap(box: tuple[int, int, int, int], wide: int = 18) -> tuple[np.ndarray, np.ndarray]:
+        disp = np.full((box[3] - box[1], box[2] - box[0]), 8.0, np.float32)  # the far wall
+        disp[:, 5:5 + wide] = 19.6  # the post, from column 60
+        return disp, np.ones(disp.shape, bool)
+
+    assert len(join_occluded([left, right], post_in_gap, 0.04, moments)) == 1  # 18 + 4 of 31 columns
+    assert len(join_occluded([left, right], lambda box: post_in_gap(box, 8), 0.04, moments)) == 2  # 8 + 4
+
+
 
 def test_parts_of_one_body_verified_from_different_boxes_are_joined() -> None:
     yy, xx = np.mgrid[0:H, 0:W].astype(np.float64)

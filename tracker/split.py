@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 from tracker.frames import StereoFrame
 from tracker.rectify import Rectifier
 from tracker.regions import mask_centroid
+from tracker.visibility import right_shadow
 
 if TYPE_CHECKING:
     from tracker.verify import Blob
@@ -129,7 +130,8 @@ def occluded_gap(a: Blob, b: Blob, bg_disparity: Callable[[Box], tuple[F32, Bool
     within the rival gap (max(MIN_GAP_PX, MIN_GAP_REL d)), their rows overlapping by half the shorter, the
     columns between them at most OCCLUDED_GAP_REL of the union's width, and there, on the shared rows, at
     least OCCLUDER_SHARE of the known background (bg_disparity(box) -> (disparity px, valid)) nearer than
-    the body: d_bg > d (1 + min_gap) + 0.5 px, the verifier's test turned round."""
+    the body (d_bg > d (1 + min_gap) + 0.5 px, the verifier's test turned round) or in that nearer
+    background's shadow (tracker.visibility.right_shadow)."""
     d = max(a.disparity, b.disparity)
     if abs(a.disparity - b.disparity) >= max(MIN_GAP_PX, MIN_GAP_REL * d):
         return False
@@ -142,7 +144,13 @@ def occluded_gap(a: Blob, b: Blob, bg_disparity: Callable[[Box], tuple[F32, Bool
         return False
     disp, valid = bg_disparity((ax1, y0, bx0, y1))
     n = int(np.count_nonzero(valid))
-    return n > 0 and int(np.count_nonzero(valid & (disp > d * (1.0 + min_gap) + 0.5))) >= OCCLUDER_SHARE * n
+    if n == 0:
+        return False
+    # the occluder and, right of it, the columns the right camera cannot see the body in (d_near - d px
+    # wide: verification cannot find it there either): occlusion:body's start-up, the car's two sides of
+    # the post 31 px apart, 57 % of the gap the post itself, 71 % with its shadow
+    hidden = right_shadow(valid & (disp > d * (1.0 + min_gap) + 0.5), disp, d)
+    return int(np.count_nonzero(hidden & valid)) >= OCCLUDER_SHARE * n
 
 
 def join(a: Blob, b: Blob, area_moments: NDArray[np.float64], lead: Blob | None = None) -> Blob:

@@ -95,7 +95,7 @@ def cut_and_skew(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, i
     ring = _sides(ring_px, centre, half)
     edge = _sides(mask & (cv2.erode(m8, _RING) == 0), centre, half)  # the outline's own 2-px rim
     nearer = bg_valid & (bg_disparity > disparity + cfg.nearer_px)
-    hidden = _right_shadow(nearer, bg_disparity, disparity)
+    hidden = right_shadow(nearer, bg_disparity, disparity)
     level = bg_valid & (bg_disparity > disparity - cfg.level_px)
     behind = bg_valid & (bg_disparity < disparity - cfg.jump_px)
     by_bg = [False] * 4
@@ -162,7 +162,7 @@ def object_and_shadow(box: tuple[int, int, int, int], mask: BoolA, disparity: fl
     return [(box, mask, disparity), ((x0 - s, y0, x1 - s, y1), mask, disparity)]
 
 
-def _right_shadow(nearer: BoolA, bg_disparity: F32, disparity: float) -> BoolA:
+def right_shadow(nearer: BoolA, bg_disparity: F32, disparity: float) -> BoolA:
     """The nearer background and, right of it, the columns the right camera does not see the target in:
     up to d_near - d px (d_near the nearer background's largest disparity in the box, d the target's)."""
     if not nearer.any():
