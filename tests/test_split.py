@@ -112,6 +112,9 @@ def test_a_head_further_above_a_torso_that_lost_its_shoulders_middle_is_part_of_
     beside = np.zeros_like(torso)
     beside[40:100, 84:96] = True  # another body 4 px to the side, at the same depth
     assert not same_body(torso, 20.0, beside, 20.0)
+    higher = np.zeros_like(torso)
+    higher[0:26, 70:100] = True  # one a little higher and to the side: 4 rows above, past the torso's columns
+    assert not same_body(torso, 20.0, higher, 20.0) and not same_body(higher, 20.0, torso, 20.0)
 
 
 def test_a_new_region_that_matches_nowhere_whole_is_searched_by_thirds(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -208,6 +211,20 @@ def test_the_columns_a_post_hides_from_the_right_camera_count_as_the_posts() -> 
 
     assert len(join_occluded([left, right], post_in_gap, 0.04, moments)) == 1  # 18 + 4 of 31 columns
     assert len(join_occluded([left, right], lambda box: post_in_gap(box, 8), 0.04, moments)) == 2  # 8 + 4
+
+    def post_at_right(box: tuple[int, int, int, int]) -> tuple[np.ndarray, np.ndarray]:
+        disp = np.full((box[3] - box[1], box[2] - box[0]), 8.0, np.float32)
+        disp[:, -18:] = 19.6  # the post against the right part: its shadow falls on that part, not the gap
+        return disp, np.ones(disp.shape, bool)
+
+    assert len(join_occluded([left, right], post_at_right, 0.04, moments)) == 2  # 18 of 31 columns
+
+    def thin_pole(box: tuple[int, int, int, int]) -> tuple[np.ndarray, np.ndarray]:
+        disp = np.full((box[3] - box[1], box[2] - box[0]), 8.0, np.float32)
+        disp[:, 2:4] = 40.0  # a 2-px pole far nearer: it hides itself and a 2-px strip 24 px right of it
+        return disp, np.ones(disp.shape, bool)
+
+    assert len(join_occluded([left, right], thin_pole, 0.04, moments)) == 2
 
 
 

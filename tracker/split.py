@@ -101,9 +101,10 @@ PART_STACK_REL = 0.1
 def same_body(a: BoolA, d_a: float, b: BoolA, d_b: float) -> bool:
     """Whether region b (box pixels, disparity d_b px) is a part of the body of region a (d_a): their
     disparities differ by less than the rival gap of own_pixels (max(MIN_GAP_PX, MIN_GAP_REL d)) and b lies
-    within max(PART_GAP_MIN_PX, PART_GAP_REL h) px of a, or as far sideways and PART_STACK_REL h rows
-    above or below it, h the rows the taller of the two spans, whichever was found first (a head verified
-    before its body is as much a part of it as after)."""
+    within max(PART_GAP_MIN_PX, PART_GAP_REL h) px of a, or, the smaller one's middle column within the
+    other's columns, as far sideways and PART_STACK_REL h rows above or below it; h the rows the
+    taller of the two spans, whichever was found first (a head verified before its body is as much a part of
+    it as after)."""
     if abs(d_a - d_b) >= max(MIN_GAP_PX, MIN_GAP_REL * max(d_a, d_b)):
         return False
     rows, rows_b = np.flatnonzero(a.any(axis=1)), np.flatnonzero(b.any(axis=1))
@@ -114,7 +115,13 @@ def same_body(a: BoolA, d_a: float, b: BoolA, d_b: float) -> bool:
     k = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * gap + 1, 2 * gap + 1))
     if np.any((cv2.dilate(a.view(np.uint8), k) > 0) & b):
         return True
-    k = np.ones((2 * max(gap, int(round(PART_STACK_REL * h))) + 1, 2 * gap + 1), np.uint8)  # up and down further
+    # straight above or below: the smaller part's middle column within the other's columns (a head over its
+    # torso, not two people side by side one a little higher in the image)
+    small, big = (a, b) if np.count_nonzero(a) < np.count_nonzero(b) else (b, a)
+    cols, cols_big = np.flatnonzero(small.any(axis=0)), np.flatnonzero(big.any(axis=0))
+    if not cols_big[0] <= (cols[0] + cols[-1]) / 2.0 <= cols_big[-1]:
+        return False
+    k = np.ones((2 * max(gap, int(round(PART_STACK_REL * h))) + 1, 2 * gap + 1), np.uint8)
     return bool(np.any((cv2.dilate(a.view(np.uint8), k) > 0) & b))
 
 
@@ -215,11 +222,12 @@ def join_parts(blobs: list[Blob], area_moments: NDArray[np.float64]) -> list[Blo
 
 def _parts_of_one(a: Blob, b: Blob) -> bool:
     """same_body for blobs of different boxes: both masks painted into the union of the boxes, the larger
-    blob as the body (its rows set the gap); boxes farther apart than any part gap are not compared."""
+    blob as the body; boxes farther apart than any part gap (from the taller box's rows) are not compared."""
     if a.area < b.area:
         a, b = b, a
-    gap = max(PART_GAP_MIN_PX, int(round(PART_GAP_REL * a.mask.shape[0]))) + 1
-    stack = max(gap, int(round(PART_STACK_REL * a.mask.shape[0])) + 1)
+    tall = max(a.mask.shape[0], b.mask.shape[0])  # at least the taller row span, which same_body takes
+    gap = max(PART_GAP_MIN_PX, int(round(PART_GAP_REL * tall))) + 1
+    stack = max(gap, int(round(PART_STACK_REL * tall)) + 1)
     if (b.box[0] > a.box[2] + gap or a.box[0] > b.box[2] + gap or b.box[1] > a.box[3] + stack
             or a.box[1] > b.box[3] + stack):
         return False

@@ -163,17 +163,21 @@ def object_and_shadow(box: tuple[int, int, int, int], mask: BoolA, disparity: fl
 
 
 def right_shadow(nearer: BoolA, bg_disparity: F32, disparity: float) -> BoolA:
-    """The nearer background and, right of it, the columns the right camera does not see the target in:
-    up to d_near - d px (d_near the nearer background's largest disparity in the box, d the target's)."""
+    """The nearer background and the columns the right camera does not see the target in because of it:
+    each nearer pixel's copy d_near - d px to its right (d_near its disparity, d the target's; both pixels
+    a fractional shift falls between). A post at least that wide hides one band from its left edge to
+    d_near - d px past its right one; a thinner pole hides two strips, itself and its copy, and not the
+    columns between them."""
     if not nearer.any():
         return nearer
-    gap = min(int(np.ceil(float(bg_disparity[nearer].max()) - disparity)), nearer.shape[1] - 1)
-    if gap <= 0:
-        return nearer
-    # out[:, x] = nearer[:, x - gap .. x] OR-ed: a dilation by a row of gap + 1 anchored at its right end
-    row = np.ones((1, gap + 1), np.uint8)
-    return np.asarray(cv2.dilate(nearer.view(np.uint8), row, anchor=(gap, 0), borderType=cv2.BORDER_CONSTANT,
-                                 borderValue=0), np.uint8).view(bool)
+    ys, xs = np.nonzero(nearer)
+    shift = np.maximum(bg_disparity[ys, xs].astype(np.float64) - disparity, 0.0)
+    out = nearer.copy()
+    w = nearer.shape[1]
+    for x in (xs + np.floor(shift).astype(np.intp), xs + np.ceil(shift).astype(np.intp)):
+        inside = x < w
+        out[ys[inside], x[inside]] = True
+    return out
 
 
 def padded(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, int], pad: int = 2, left: int = 2,
