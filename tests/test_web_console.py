@@ -148,6 +148,34 @@ def test_jog_by_keyboard_and_pad_moves_the_mount(server: Server, page_of: Any) -
     assert _servo(server)["mode"] == "auto"
 
 
+# Jog requests reach the server 400 ms late, as on a slow link: the stop sent when the pad is released is
+# still on its way when the operator clicks a mode.
+SLOW_JOG = """const realFetch = window.fetch.bind(window);
+window.fetch = async (input, init) => {
+  if (String(input).endsWith('/api/servo/jog')) await new Promise((r) => setTimeout(r, 400));
+  return realFetch(input, init);
+};"""
+
+
+def test_a_mode_clicked_while_a_jog_stop_is_in_flight_is_not_undone(server: Server, page_of: Any) -> None:
+    page = page_of(init_script=SLOW_JOG)
+    login(page, *user(server, "olga", "operator"))
+    page.get_by_test_id("sb-telemetry").filter(has_text="Telemetry: connected").wait_for()
+    _goto(server, 0.0, 0.0)
+    page.get_by_label("Jog speed").fill("20")
+    box = page.get_by_role("button", name="Pan left").bounding_box()
+    page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+    page.mouse.down()
+    page.wait_for_timeout(1200)
+    page.mouse.up()
+    page.get_by_role("button", name="Auto", exact=True).click()  # the stop has not reached the server yet
+    wait_for(lambda: page.get_by_role("button", name="Auto", exact=True).get_attribute("aria-pressed") == "true", 10,
+             what="Auto pressed")
+    page.wait_for_timeout(1000)  # every jog request has been answered by now
+    assert _servo(server)["mode"] == "auto"
+    assert page.get_by_role("button", name="Auto", exact=True).get_attribute("aria-pressed") == "true"
+
+
 # A gamepad the test holds: navigator.getGamepads() returns it while window.__pad.connected (the Gamepad API
 # of a headless browser has no device to report).
 FAKE_PAD = """window.__pad = {id: 'Test pad (STANDARD GAMEPAD)', index: 0, connected: false, mapping: 'standard',

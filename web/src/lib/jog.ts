@@ -3,6 +3,8 @@
 // 250 ms (one request in flight at a time), and a zero-rate jog stops the mount when all are released.
 // A change of rate is sent at once, but no sooner than MIN_GAP_MS after the previous request (an analog
 // stick polled every animation frame changes a little each time); a stop is always sent at once.
+// halt() stops every input and resolves once the server has answered the last jog request, so that a
+// command sent after it (a mode, a go-to) reaches the server after the stop and is not undone by it.
 import { api, ApiError } from "../api/client";
 
 export type Vec = { pan: number; tilt: number };
@@ -15,6 +17,7 @@ export class JogController {
   private busy = false;
   private moving = false;
   private lastSent = -Infinity;
+  private flight: Promise<void> | null = null; // the jog request in flight and what it sends next
 
   constructor(private readonly onError: (e: ApiError) => void, private readonly onSent?: (v: Vec) => void) {}
 
@@ -45,8 +48,15 @@ export class JogController {
     window.clearTimeout(this.timer);
     const v = this.sum();
     const wait = v.pan === 0 && v.tilt === 0 ? 0 : this.lastSent + MIN_GAP_MS - performance.now();
-    if (wait <= 0) void this.send();
-    else this.timer = window.setTimeout(() => void this.send(), wait);
+    if (wait <= 0) this.run();
+    else this.timer = window.setTimeout(() => this.run(), wait);
+  }
+
+  private run(): void {
+    const p: Promise<void> = this.send().finally(() => {
+      if (this.flight === p) this.flight = null;
+    });
+    this.flight = p;
   }
 
   private async send(): Promise<void> {
@@ -68,7 +78,7 @@ export class JogController {
     }
     const now = this.sum();
     if (now.pan !== v.pan || now.tilt !== v.tilt) this.kick(); // changed while the request was in flight
-    else if (now.pan !== 0 || now.tilt !== 0) this.timer = window.setTimeout(() => void this.send(), 250);
+    else if (now.pan !== 0 || now.tilt !== 0) this.timer = window.setTimeout(() => this.run(), 250);
   }
 
   /** A single short move (keyboard Enter/Space on a pad button). */
@@ -85,5 +95,11 @@ export class JogController {
     this.inputs.clear();
     window.clearTimeout(this.timer);
     if (this.moving) this.kick();
+  }
+
+  /** stopAll(), then wait until the server has answered every jog request, the stop included. */
+  async halt(): Promise<void> {
+    this.stopAll();
+    while (this.flight) await this.flight;
   }
 }

@@ -199,7 +199,7 @@ export function livePage(ctx: PageContext): Page {
   // ---------------------------------------------------------------- controls
   const ctlMsg = notice("status");
   const modeButtons = MODES.map((m) => h("button", { type: "button", class: "mode", "aria-pressed": "false",
-    title: MODE_HELP[m], "data-mode": m, onclick: () => void act(() => api.setMode(m), `Mode ${m}`) },
+    title: MODE_HELP[m], "data-mode": m, onclick: () => void drive(() => api.setMode(m), `Mode ${m}`) },
     m[0].toUpperCase() + m.slice(1)));
   const speed = h("input", { type: "range", min: 1, max: 90, step: 1, name: "jog-speed" });
   speed.value = localStorage.getItem("tmeye.jogspeed") ?? "15";
@@ -237,7 +237,7 @@ export function livePage(ctx: PageContext): Page {
     return b;
   });
   const stopBtn = h("button", { type: "button", class: "pad-stop", "aria-label": "Stop", title: "Stop jogging",
-    onclick: () => { jog.stopAll(); void act(() => api.setMode("hold"), "Hold"); } }, "■");
+    onclick: () => void drive(() => api.setMode("hold"), "Hold") }, "■");
   const pad = h("div", { class: "pad", role: "group", "aria-label": "Jog pad" },
     padButtons[0], padButtons[1], stopBtn, padButtons[2], padButtons[3]);
   const gamepadState = h("p", { class: "muted small", "data-testid": "gamepad" }, "Gamepad: none connected");
@@ -248,7 +248,7 @@ export function livePage(ctx: PageContext): Page {
     h("button", { type: "submit" }, "Go to"));
   gotoForm.addEventListener("submit", (ev) => {
     ev.preventDefault();
-    void act(() => api.goto({ pan_deg: Number(panIn.value), tilt_deg: Number(tiltIn.value) }), "Go to");
+    void drive(() => api.goto({ pan_deg: Number(panIn.value), tilt_deg: Number(tiltIn.value) }), "Go to");
   });
 
   const presetList = h("ul", { class: "preset-list", "aria-label": "Presets" });
@@ -257,7 +257,7 @@ export function livePage(ctx: PageContext): Page {
     h("button", { type: "submit" }, "Save current position"));
   presetForm.addEventListener("submit", (ev) => {
     ev.preventDefault();
-    void act(() => api.createPreset({ name: presetName.value.trim() }), "Save preset").then((ok) => {
+    void drive(() => api.createPreset({ name: presetName.value.trim() }), "Save preset").then((ok) => {
       if (ok) {
         presetName.value = "";
         void loadPresets();
@@ -312,6 +312,14 @@ export function livePage(ctx: PageContext): Page {
     }
   }
 
+  /** act() for a command that moves the mount or sets its mode: jogging stops first, and the command is sent
+   * once the server has answered the last jog (a stop still in flight would otherwise arrive after the
+   * command and switch the mount back to manual). */
+  async function drive(fn: () => Promise<unknown>, what: string): Promise<boolean> {
+    if (canDrive) await jog.halt();
+    return act(fn, what);
+  }
+
   async function loadPresets(): Promise<void> {
     let list: Preset[];
     try {
@@ -324,7 +332,7 @@ export function livePage(ctx: PageContext): Page {
       h("span", { class: "preset-name" }, `${p.name}`), h("span", { class: "muted" }, ` ${num(p.pan_deg, 1)}°, ${num(p.tilt_deg, 1)}°`),
       h("span", { class: "preset-actions" },
         h("button", { type: "button", "aria-label": `Go to preset ${p.name}`,
-          onclick: () => void act(() => api.gotoPreset(p.id), `Preset ${p.name}`) }, "Go"),
+          onclick: () => void drive(() => api.gotoPreset(p.id), `Preset ${p.name}`) }, "Go"),
         h("button", { type: "button", class: "danger", "aria-label": `Delete preset ${p.name}`,
           onclick: () => void act(() => api.deletePreset(p.id), `Delete ${p.name}`).then(() => loadPresets()) }, "Delete"))))
       : [h("li", { class: "muted" }, "No presets yet")]));
@@ -440,7 +448,7 @@ export function livePage(ctx: PageContext): Page {
       }
       const d = cam.camera === "left" ? detectionAt(cam.shown ?? buffer.latest, u, v) : null;
       if (d) void act(() => api.makePrimary(d.track_id), `Primary target #${d.track_id}`);
-      else void act(() => api.point({ camera: cam.camera, u: Math.round(u * 10) / 10, v: Math.round(v * 10) / 10 }),
+      else void drive(() => api.point({ camera: cam.camera, u: Math.round(u * 10) / 10, v: Math.round(v * 10) / 10 }),
         `Point ${cam.camera} camera at (${u.toFixed(0)}, ${v.toFixed(0)})`);
     });
     if (canDrive) cam.frame.classList.add("clickable");
