@@ -112,16 +112,15 @@ def same_body(a: BoolA, d_a: float, b: BoolA, d_b: float) -> bool:
         return False
     h = max(rows[-1] - rows[0] + 1, rows_b[-1] - rows_b[0] + 1)
     gap = max(PART_GAP_MIN_PX, int(round(PART_GAP_REL * h)))
-    k = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * gap + 1, 2 * gap + 1))
-    if np.any((cv2.dilate(a.view(np.uint8), k) > 0) & b):
-        return True
-    # straight above or below: the smaller part's middle column within the other's columns (a head over its
-    # torso, not two people side by side one a little higher in the image)
+    # straight above or below, further: where the smaller part's middle column lies within the other's
+    # columns (a head over its torso, not two people side by side one a little higher in the image); the
+    # rectangle holds the disc of radius gap, so one dilation decides
     small, big = (a, b) if np.count_nonzero(a) < np.count_nonzero(b) else (b, a)
     cols, cols_big = np.flatnonzero(small.any(axis=0)), np.flatnonzero(big.any(axis=0))
-    if not cols_big[0] <= (cols[0] + cols[-1]) / 2.0 <= cols_big[-1]:
-        return False
-    k = np.ones((2 * max(gap, int(round(PART_STACK_REL * h))) + 1, 2 * gap + 1), np.uint8)
+    if cols_big[0] <= (cols[0] + cols[-1]) / 2.0 <= cols_big[-1]:
+        k = np.ones((2 * max(gap, int(round(PART_STACK_REL * h))) + 1, 2 * gap + 1), np.uint8)
+    else:
+        k = np.asarray(cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * gap + 1, 2 * gap + 1)), np.uint8)
     return bool(np.any((cv2.dilate(a.view(np.uint8), k) > 0) & b))
 
 
