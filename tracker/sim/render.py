@@ -21,7 +21,8 @@ from numpy.typing import NDArray
 from tracker.frames import GimbalState, StereoFrame
 from tracker.geometry import Camera, StereoRig, gimbal_rotation
 from tracker.sim.scene import Surface
-from tracker.sim.static_cast import Plan, StaticScene
+from tracker.sim.static_cast import StaticScene
+from tracker.sim.static_plan import Plan
 
 F64 = NDArray[np.float64]
 F32 = NDArray[np.float32]
