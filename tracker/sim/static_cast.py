@@ -167,6 +167,7 @@ class StaticScene:
         self.cams = cams
         self.surfaces = surfaces
         self._fast = [s for s in surfaces if _fits_atlas(s)][:255]  # labels are uint8, 255 for none
+        self._fast_ids = {id(s) for s in self._fast}
         self._atlas, origins = _atlas(self._fast) if self._fast else (np.zeros((1, 1), np.uint8), np.zeros((0, 2)))
         reach = max((float(np.linalg.norm(c.c)) for c in cams), default=0.0)  # camera centres' distance from
         self._planes = _planes(self._fast, origins, reach)  # the gimbal's centre, the world's origin
@@ -186,7 +187,8 @@ class StaticScene:
         and at the pixels cast one by one (tracker.sim.static_plan.plan_camera). Many small numpy steps
         that hold the GIL most of the time: run the planning of both cameras on one thread and overlap it
         with draw(), which is a few large OpenCV calls that release it."""
-        return plan_camera(k, self.cams[k], self._grids[k], self._planes, R_wr, self._fast, self.surfaces)
+        return plan_camera(k, self.cams[k], self._grids[k], self._planes, R_wr, self._fast, self._fast_ids,
+                           self.surfaces)
 
     def draw(self, plan: Plan) -> tuple[U8, F32]:
         """A plan's image (H, W) uint8 and inverse distances 1/z (H, W) float32: the node values

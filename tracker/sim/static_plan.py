@@ -71,12 +71,11 @@ class Plan:
     rest: list[Surface]
 
 
-def plan_camera(k: int, cam: Camera, grid: Grid, p: Planes, R_wr: F64, fast: list[Surface],
+def plan_camera(k: int, cam: Camera, grid: Grid, p: Planes, R_wr: F64, fast: list[Surface], fast_ids: set[int],
                 surfaces: list[Surface]) -> Plan:
     """Camera k's plan (cam and grid its own) at gimbal rotation R_wr, drawing the surfaces fast (p: them as
-    arrays) from the atlas and leaving the rest of surfaces to the caller: which surface each cell sees,
-    (X, Y, W) at the nodes and at the pixels cast one by one."""
-    fast_ids = {id(s) for s in fast}
+    arrays; fast_ids: their id()s) from the atlas and leaving the rest of surfaces to the caller: which
+    surface each cell sees, (X, Y, W) at the nodes and at the pixels cast one by one."""
     H, q = plane_rows(cam, R_wr, p)
     near = np.abs(q) < 0.1  # then every hit is over 0.1 m away, as the reference requires (> 0.05 m)
     too_near = {id(s) for s, n in zip(fast, near, strict=True) if n}
