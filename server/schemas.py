@@ -92,7 +92,9 @@ class Status(BaseModel):
                                              "track's recent frame instead of working them out (setting "
                                              "sigma_budget_ms), since the start")
     source_faults: int = Field(0, description="source faults (a read that failed or stalled) since the start")
-    source: dict[str, Any]
+    source: dict[str, Any] = Field(description="the frame source: kind, fps, width and height (px), hfov_deg and "
+                                               "vfov_deg (the left camera's field of view in the rig in use, "
+                                               "degrees), and its scenario and seed or its inputs")
     servo: ServoStatus
     faults: list[Fault]
     subscribers: int

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from tracker.geometry import (
+    Camera,
     StereoRig,
     euler_to_matrix,
     gimbal_rotation,
@@ -99,3 +100,14 @@ def test_spherical_jacobian_matches_finite_differences() -> None:
     assert np.allclose(J, num, atol=1e-6)
     r, th, ph = spherical(p)
     assert th > 0 and ph > 0  # right of and above the axis (y is down)
+
+
+def test_field_of_view_of_a_pinhole_and_of_a_barrel_lens() -> None:
+    K = np.array([[500.0, 0.0, 319.5], [0.0, 500.0, 239.5], [0.0, 0.0, 1.0]])
+    pinhole = Camera(K, np.zeros(5), (640, 480))
+    h, v = pinhole.field_of_view_deg()
+    assert h == pytest.approx(2 * np.degrees(np.arctan(320 / 500)), abs=1e-9)
+    assert v == pytest.approx(2 * np.degrees(np.arctan(240 / 500)), abs=1e-9)
+    # barrel distortion (k1 < 0) squeezes the edges in: the same sensor sees wider
+    wide = Camera(K, np.array([-0.2, 0.0, 0.0, 0.0, 0.0]), (640, 480)).field_of_view_deg()
+    assert wide[0] > h + 1.0 and wide[1] > v + 0.5

@@ -12,6 +12,8 @@ import httpx
 import pytest
 from server_helpers import Server, openapi_routes, start_server
 
+from tracker.sim.rig import default_rig
+
 PUBLIC = {("GET", "/api/health"), ("POST", "/api/auth/login")}
 # The role each operation needs; every operation of the document must be listed (a new route must be placed).
 ROLE = {
@@ -238,6 +240,9 @@ def test_status_telemetry_and_tracks(server: Server) -> None:
         assert st["state"] == "running" and st["source"]["scenario"] == "endless" and st["servo"]["mode"]
         assert set(st) >= {"frame", "fps", "skipped_frames", "source", "servo", "faults"}
         assert isinstance(st["deferred_boxes"], int) and st["deferred_boxes"] >= 0
+        hfov, vfov = default_rig().left.field_of_view_deg()  # the simulated rig's: what the console's plots draw
+        assert st["source"]["hfov_deg"] == pytest.approx(hfov, abs=1e-3)
+        assert st["source"]["vfov_deg"] == pytest.approx(vfov, abs=1e-3)
         tm = c.get("/api/telemetry/latest").json()
         assert tm["frame"] >= st["frame"] and abs(tm["captured_at"] - time.time()) < 5.0
         deadline = time.monotonic() + 30

@@ -90,6 +90,17 @@ class Camera:
         """Mean focal length in pixels."""
         return float(0.5 * (self.K[0, 0] + self.K[1, 1]))
 
+    def field_of_view_deg(self) -> tuple[float, float]:
+        """The horizontal and vertical field of view (degrees): the angles between the rays through the
+        middles of the image's opposite edges (pixel edges -0.5 and size - 0.5), lens distortion included."""
+        w, h = self.size
+        cx, cy = float(self.K[0, 2]), float(self.K[1, 2])
+        xn, yn = self.undistort_pixels(np.array([-0.5, w - 0.5, cx, cx]), np.array([cy, cy, -0.5, h - 0.5]))
+        rays = np.stack([xn, yn, np.ones(4)], axis=1)
+        rays /= np.linalg.norm(rays, axis=1, keepdims=True)
+        return (float(np.degrees(np.arccos(np.clip(rays[0] @ rays[1], -1.0, 1.0)))),
+                float(np.degrees(np.arccos(np.clip(rays[2] @ rays[3], -1.0, 1.0)))))
+
     def distort_normalized(self, xn: F64, yn: F64) -> tuple[F64, F64]:
         """Undistorted normalized coordinates -> distorted pixel coordinates (arrays of any shape)."""
         k1, k2, p1, p2, k3 = (float(k) for k in self.dist)  # Python floats: float32 input stays float32

@@ -229,9 +229,12 @@ def rebuild_pipeline(comp: Composition, rig: StereoRig, tuning: TrackerTuning) -
 
 
 def describe_source(c: Composition) -> dict[str, Any]:
-    """The source part of the status: kind, scenario or inputs, frame rate, image size."""
+    """The source part of the status: kind, scenario or inputs, frame rate, image size, and the left camera's
+    field of view (degrees, from the rig in use)."""
     w, h = c.rig.left.size
-    out: dict[str, Any] = {"kind": c.config.source, "fps": c.fps, "width": w, "height": h}
+    hfov, vfov = c.rig.left.field_of_view_deg()
+    out: dict[str, Any] = {"kind": c.config.source, "fps": c.fps, "width": w, "height": h,
+                           "hfov_deg": round(hfov, 3), "vfov_deg": round(vfov, 3)}
     if c.config.source == "recording":
         out.update({"inputs": list(c.config.inputs), "start": c.config.start, "end": c.config.end})
     elif c.config.source == "sim":

@@ -2117,7 +2117,10 @@ export interface components {
              * @default 0
              */
             source_faults: number;
-            /** Source */
+            /**
+             * Source
+             * @description the frame source: kind, fps, width and height (px), hfov_deg and vfov_deg (the left camera's field of view in the rig in use, degrees), and its scenario and seed or its inputs
+             */
             source: {
                 [key: string]: unknown;
             };
