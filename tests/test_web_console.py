@@ -89,6 +89,13 @@ def test_live_page_shows_status_and_updating_telemetry(server: Server, page_of: 
     wait_for(lambda: "±" in r.inner_text(), 60, what="a target's range")
     assert re.search(r"\d+\.\d+ ± \d+\.\d+ m", r.inner_text())
     assert "±" in page.get_by_test_id("ro-theta").inner_text()
+    # the plots' field of view is the rig's (the simulated rig: 57.7 x 44.3 degrees), at the mount's angles
+    with server.as_admin() as c:
+        fov = c.get("/api/status").json()["source"]
+    plan = page.get_by_test_id("fov-plan")
+    wait_for(lambda: plan.text_content().startswith("FOV"), 10, what="the plan view's field of view")
+    assert plan.text_content().startswith(f"FOV {fov['hfov_deg']:.0f}°, pan ")
+    assert page.get_by_test_id("fov-side").text_content().startswith(f"FOV {fov['vfov_deg']:.0f}°, tilt ")
 
 
 def test_viewer_sees_controls_disabled_with_the_reason(server: Server, page_of: Any) -> None:
