@@ -94,8 +94,10 @@ export class TrackPlots {
       }
     }
     const [planWedge, sideWedge] = this.wedges();
-    this.fovText[0].textContent = planWedge?.label ?? "Field of view not known yet";
-    this.fovText[1].textContent = sideWedge?.label ?? "Field of view not known yet";
+    [planWedge, sideWedge].forEach((w, k) => {
+      const text = w?.label ?? "Field of view not known yet";
+      if (this.fovText[k].textContent !== text) this.fovText[k].textContent = text;
+    });
     this.plan.setData([prim, others, this.zones], planWedge ? [planWedge] : [], headsPlan);
     this.side.setData([sPrim, sOthers], sideWedge ? [sideWedge] : [], headsSide);
   }
