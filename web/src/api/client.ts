@@ -17,6 +17,11 @@ export class ApiError extends Error {
   }
 }
 
+/** What went wrong, in one line: an API error's detail, else the error's message. */
+export function errorText(e: unknown): string {
+  return e instanceof ApiError ? e.detail : e instanceof Error ? e.message : String(e);
+}
+
 const UNSAFE = new Set(["POST", "PUT", "PATCH", "DELETE"]);
 let csrfFromLogin: string | null = sessionStorage.getItem("tmeye.csrf");
 

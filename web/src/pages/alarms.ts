@@ -2,7 +2,7 @@
 // or every alarm of the last day; acknowledge with a comment, shelve for some minutes or until the alarm
 // clears (one-shot) with a reason, unshelve (operator), each alarm's history with who did what, a link to its playback; the rules
 // (admin: create, enable, take out of service, delete).
-import { api, ApiError, request } from "../api/client";
+import { api, errorText, request } from "../api/client";
 import type { AlarmOut } from "../api/types";
 import { alarmCenter, byPriorityThenTime } from "../lib/alarms";
 import { h, notice } from "../lib/dom";
@@ -37,7 +37,7 @@ export function alarmsPage(ctx: PageContext): Page {
     atLeast(session, "admin") ? rulesPanel(msg) : null));
 
   const rows = new Map<number, Row>();
-  const fail = (what: string, e: unknown) => msg.show(`${what}: ${e instanceof ApiError ? e.detail : String(e)}`, "bad");
+  const fail = (what: string, e: unknown) => msg.show(`${what}: ${errorText(e)}`, "bad");
 
   async function run(what: string, fn: () => Promise<unknown>): Promise<void> {
     try {

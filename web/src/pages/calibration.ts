@@ -1,6 +1,6 @@
 // The Calibration page: upload left/right chessboard image pairs with the board spec (admin), follow the
 // progress from /ws/events, list the records, activate one (admin), download its rig file.
-import { api, ApiError } from "../api/client";
+import { api, errorText } from "../api/client";
 import type { CalibrationOut, ServerEvent } from "../api/types";
 import { field, h, notice } from "../lib/dom";
 import { num, time } from "../lib/format";
@@ -84,7 +84,7 @@ export function calibrationPage(ctx: PageContext): Page {
       msg.show(`Uploaded: calibration #${rec.id} is running.`, "ok");
       void load();
     } catch (e) {
-      msg.show(`Upload refused: ${e instanceof ApiError ? e.detail : String(e)}`, "bad");
+      msg.show(`Upload refused: ${errorText(e)}`, "bad");
     } finally {
       submit.disabled = false;
     }
@@ -103,7 +103,7 @@ export function calibrationPage(ctx: PageContext): Page {
     try {
       list = await api.calibrations();
     } catch (e) {
-      msg.show(`Calibrations could not be loaded: ${e instanceof ApiError ? e.detail : String(e)}`, "bad");
+      msg.show(`Calibrations could not be loaded: ${errorText(e)}`, "bad");
       return;
     }
     tbody.replaceChildren(...(list.length ? list.map((c) => h("tr", null, h("th", { scope: "row" }, String(c.id)),
@@ -120,7 +120,7 @@ export function calibrationPage(ctx: PageContext): Page {
               msg.show(`Calibration #${c.id} is now the tracker's rig.`, "ok");
               void load();
             } catch (e) {
-              msg.show(`Not activated: ${e instanceof ApiError ? e.detail : String(e)}`, "bad");
+              msg.show(`Not activated: ${errorText(e)}`, "bad");
             }
           } }, "Activate") : null))))
       : [h("tr", null, h("td", { colSpan: 8, class: "muted" }, "No calibrations yet."))]));

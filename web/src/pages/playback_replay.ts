@@ -1,7 +1,7 @@
 // The Playback page's replays: the tracker re-run on the loaded range (POST /api/replays, operator) with
 // another threshold, and a selector of the finished replays overlapping the range whose trajectories the
 // page draws beside the live ones (in another colour), with the replay's agreement with the live result.
-import { api, ApiError, request } from "../api/client";
+import { api, errorText, request } from "../api/client";
 import type { components } from "../api/schema";
 import { field, h } from "../lib/dom";
 import { num, time } from "../lib/format";
@@ -9,7 +9,6 @@ import { num, time } from "../lib/format";
 type Replay = components["schemas"]["ReplayOut"];
 export type TrackDetail = components["schemas"]["TrackDetail"];
 
-const why = (e: unknown) => (e instanceof ApiError ? e.detail : e instanceof Error ? e.message : String(e));
 const MAX_TRACKS = 40;
 
 export interface ReplayPanel {
@@ -79,7 +78,7 @@ export function replayPanel(operator: boolean, draw: (tracks: TrackDetail[]) => 
       select.value = String(job.id);
       await show();
     } catch (e) {
-      out.textContent = `Replay failed: ${why(e)}`;
+      out.textContent = `Replay failed: ${errorText(e)}`;
     }
   }
 

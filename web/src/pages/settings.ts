@@ -2,7 +2,7 @@
 // OpenAPI document's schemas (limits, descriptions, defaults). Admins change them (PATCH of what changed,
 // applied from the next frame); everyone else reads them.
 import openapi from "../../openapi.json";
-import { api, ApiError } from "../api/client";
+import { api, ApiError, errorText } from "../api/client";
 import type { TrackerSettings } from "../api/types";
 import { h, notice, uid } from "../lib/dom";
 import { atLeast, roleReason } from "../lib/session";
@@ -85,7 +85,7 @@ export function settingsPage(ctx: PageContext): Page {
       fill();
       msg.show("", "info");
     } catch (e) {
-      msg.show(`Settings could not be loaded: ${e instanceof ApiError ? e.detail : String(e)}`, "bad");
+      msg.show(`Settings could not be loaded: ${errorText(e)}`, "bad");
     }
   }
 
@@ -116,7 +116,7 @@ export function settingsPage(ctx: PageContext): Page {
       msg.show(`Saved ${n} setting${n === 1 ? "" : "s"}: applied from the next frame.`, "ok");
     } catch (e) {
       msg.show(e instanceof ApiError && e.status === 403 ? `Refused: ${e.detail}` :
-        `Not saved: ${e instanceof ApiError ? e.detail : String(e)}`, "bad");
+        `Not saved: ${errorText(e)}`, "bad");
     } finally {
       save.disabled = false;
     }

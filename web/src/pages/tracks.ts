@@ -1,6 +1,6 @@
 // The Tracks page: tracks seen within a time range, and one track's trajectory (plan view, range and
 // height against time).
-import { api, ApiError } from "../api/client";
+import { api, errorText } from "../api/client";
 import type { TrackDetail, TrackOut } from "../api/types";
 import { field, h, notice } from "../lib/dom";
 import { duration, fromLocalInput, num, time, toLocalInput } from "../lib/format";
@@ -61,7 +61,7 @@ export function tracksPage(ctx: PageContext): Page {
     try {
       list = await api.tracks(fromLocalInput(start.value), fromLocalInput(end.value), LIMIT);
     } catch (e) {
-      msg.show(`Tracks could not be loaded: ${e instanceof ApiError ? e.detail : String(e)}`, "bad");
+      msg.show(`Tracks could not be loaded: ${errorText(e)}`, "bad");
       return;
     }
     msg.show(list.length >= LIMIT ? `${list.length} tracks: the newest ${LIMIT} in this range (narrow it to see older ones)`
@@ -82,7 +82,7 @@ export function tracksPage(ctx: PageContext): Page {
     try {
       t = await api.track(id);
     } catch (e) {
-      detailInfo.textContent = `Track ${id} could not be loaded: ${e instanceof ApiError ? e.detail : String(e)}`;
+      detailInfo.textContent = `Track ${id} could not be loaded: ${errorText(e)}`;
       return;
     }
     for (const tr of tbody.querySelectorAll("tr")) tr.classList.toggle("selected", tr.dataset.track === String(id));

@@ -1,5 +1,5 @@
 // The Users page (admin): list, create, change role / password / disabled, delete; and the audit log.
-import { api, ApiError } from "../api/client";
+import { api, errorText } from "../api/client";
 import type { AuditOut, Role, UserOut } from "../api/types";
 import { field, h, notice } from "../lib/dom";
 import { fromLocalInput, time, toLocalInput } from "../lib/format";
@@ -40,7 +40,7 @@ export function usersPage(ctx: PageContext): Page {
       auditForm, h("div", { class: "table-wrap" }, auditTable))));
 
   const fail = (what: string, e: unknown) =>
-    msg.show(`${what}: ${e instanceof ApiError ? e.detail : String(e)}`, "bad");
+    msg.show(`${what}: ${errorText(e)}`, "bad");
 
   async function load(): Promise<void> {
     let list: UserOut[];
