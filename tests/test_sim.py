@@ -77,7 +77,7 @@ def test_second_object_and_foreground_ids() -> None:
 
 def test_fast_renderer_matches_exact_ray_casting() -> None:
     from tracker.geometry import gimbal_rotation
-    from tracker.sim import render
+    from tracker.sim import cast
 
     sim = SimRig(get_scenario("foliage"), noise_sigma=0.0)
     view = sim.renderer.views[0]
@@ -91,8 +91,8 @@ def test_fast_renderer_matches_exact_ray_casting() -> None:
         da, db = np.full((h, w), np.inf, np.float32), np.full((h, w), np.inf, np.float32)
         ia, ib = np.zeros((h, w), np.uint8), np.zeros((h, w), np.uint8)
         for s in surfaces:
-            render.cast_surface_exact(view, R, s, t, a, da, ia)
-            render._cast_plane_fast(view, R, s, b, db, t, ib)
+            cast.cast_surface_exact(view, R, s, t, a, da, ia)
+            cast.cast_plane_fast(view, R, s, b, db, t, ib)
         diff = np.abs(a.astype(int) - b.astype(int))
         assert (diff > 1).mean() < 1e-4  # a few pixels exactly on an edge may fall either way
         assert (ia != ib).mean() < 1e-4

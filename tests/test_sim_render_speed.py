@@ -10,7 +10,7 @@ from numpy.typing import NDArray
 
 from tracker.frames import GimbalState
 from tracker.geometry import gimbal_rotation
-from tracker.sim import render
+from tracker.sim import cast, render
 from tracker.sim.rig import default_rig
 from tracker.sim.scenarios import SimRig, get_scenario
 from tracker.sim.scene import Surface, smooth_texture
@@ -27,7 +27,7 @@ def _exact(renderer: render.SimRenderer, surfaces: list[Surface], g: GimbalState
         w, h = view.cam.size
         img, depth = np.zeros((h, w), np.uint8), np.full((h, w), np.inf, np.float32)
         for s in surfaces:
-            render.cast_surface_exact(view, R, s, 0.0, img, depth, None)
+            cast.cast_surface_exact(view, R, s, 0.0, img, depth, None)
         out.append((img, depth))
     return out
 
@@ -35,7 +35,7 @@ def _exact(renderer: render.SimRenderer, surfaces: list[Surface], g: GimbalState
 def _assert_matches(renderer: render.SimRenderer, surfaces: list[Surface], g: GimbalState, edge: float = 1e-5) -> None:
     """Equal up to the rounding of bilinear texture lookups (by 1 grey level, rarely), but for a fraction
     `edge` of pixels whose centre is on an edge to within rounding (the reference's rays are float32: 1e-5,
-    a few pixels; one wrong cell of the fast path is 16); 1e-4 where _cast_plane_fast casts a disc."""
+    a few pixels; one wrong cell of the fast path is 16); 1e-4 where cast_plane_fast casts a disc."""
     imgs, _ = renderer._static(g)
     depths = renderer.static_depth(g)
     for (ref, ref_depth), img, depth in zip(_exact(renderer, surfaces, g), imgs, depths, strict=True):
@@ -71,7 +71,7 @@ def test_successive_poses_of_a_slew_render_like_fresh_ones() -> None:
 
 def _awkward() -> list[Surface]:
     """Planes crossing each other at an angle, a post thinner than a pixel, a floor reaching behind the
-    cameras, sky where nothing is hit, and a disc (cast per pixel by _cast_plane_fast)."""
+    cameras, sky where nothing is hit, and a disc (cast per pixel by cast_plane_fast)."""
     rng = np.random.default_rng(5)
     ex, ey, ez = np.eye(3)
     tilt = np.array([np.cos(0.5), 0.0, np.sin(0.5)])

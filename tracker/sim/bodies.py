@@ -44,7 +44,7 @@ KINDS = ("sphere", "person", "vehicle")
 _SIGNS = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], float)  # (8, 3)
 
 
-class _ViewLike(Protocol):  # tracker.sim.render._View
+class _ViewLike(Protocol):  # tracker.sim.cast.View
     @property
     def cam(self) -> _CamLike: ...
     @property

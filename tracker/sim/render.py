@@ -19,7 +19,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tracker.frames import GimbalState, StereoFrame
-from tracker.geometry import Camera, StereoRig, gimbal_rotation
+from tracker.geometry import StereoRig, gimbal_rotation
+from tracker.sim.cast import View, cast_plane_fast, make_view, pixel_box
 from tracker.sim.scene import Surface
 from tracker.sim.static_cast import StaticScene
 from tracker.sim.static_plan import Plan
@@ -36,7 +37,7 @@ class Solid(Protocol):
 
     def corners(self) -> F64: ...
 
-    def cast(self, view: _View, R_wr: F64, img: U8, depth: F32, t: float, ids: U8 | None,
+    def cast(self, view: View, R_wr: F64, img: U8, depth: F32, t: float, ids: U8 | None,
              box: tuple[int, int, int, int]) -> None: ...
 
 
@@ -77,133 +78,6 @@ class FrameTruth:
 
     def target(self, target_id: int) -> TargetTruth | None:
         return next((tt for tt in self.targets if tt.target_id == target_id), None)
-
-
-@dataclass
-class _View:
-    """One camera's precomputed rays (rig frame, float32 (H, W, 3)) and its normalised-coordinate range."""
-
-    cam: Camera
-    rays: F32
-    xn_range: tuple[float, float]
-    yn_range: tuple[float, float]
-    xy: F32  # undistorted normalised coordinates of every pixel, (H, W, 2)
-    ray_len: F32  # |(xn, yn, 1)|, (H, W)
-    area: F32  # each pixel's area in the undistorted normalised plane, |∂(xn, yn) / ∂(u, v)|, (H, W)
-
-
-def _make_view(cam: Camera) -> _View:
-    w, h = cam.size
-    u, v = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
-    xn, yn = cam.undistort_pixels(u, v)
-    rays = cam.rays_rig(u, v).astype(np.float32)
-    xy = np.dstack([xn, yn]).astype(np.float32)
-    ray_len = np.sqrt(1.0 + xn * xn + yn * yn).astype(np.float32)
-    (xv, xu), (yv, yu) = np.gradient(xn), np.gradient(yn)  # d/dv (rows), d/du (columns)
-    area = np.abs(xu * yv - xv * yu).astype(np.float32)
-    return _View(cam, rays, (float(xn.min()) - 0.02, float(xn.max()) + 0.02),
-                 (float(yn.min()) - 0.02, float(yn.max()) + 0.02), xy, ray_len, area)
-
-
-def _cast_plane_fast(view: _View, R_wr: F64, s: Surface, img: F32 | U8, depth: F32, t: float = 0.0,
-                     ids: U8 | None = None, box: tuple[int, int, int, int] | None = None) -> None:
-    """Ray-cast a rectangular surface over its bounding box with OpenCV calls: on a plane the texture
-    coordinates are a homography of the undistorted normalised coordinates (x_n, y_n), and 1/depth is
-    linear in them. Same result as cast_surface_exact (sway included), many times faster for large areas."""
-    box = box or _pixel_box(view, s.corners() @ R_wr)
-    if box is None:
-        return
-    x0, y0, x1, y1 = box
-    R_wc = R_wr @ view.cam.R_rc.T  # camera -> world
-    c = R_wr @ view.cam.c
-    n_c, u_c, v_c = R_wc.T @ s.normal, R_wc.T @ s.u, R_wc.T @ s.v
-    q = float(s.normal @ (s.P0 - c))  # n·(P0 - c)
-    th, tw = s.texture.shape
-    a0, b0 = float((c - s.P0) @ s.u), float((c - s.P0) @ s.v)
-    # x_t = a / texel + tw/2 with a = a0 + q (u_c·m)/(n_c·m), m = (x_n, y_n, 1)
-    H = np.vstack([q * u_c / s.texel_m + (a0 / s.texel_m + tw / 2.0) * n_c,
-                   q * v_c / s.texel_m + (b0 / s.texel_m + th / 2.0) * n_c, n_c])
-    xy = view.xy[y0:y1, x0:x1]
-    mxy = np.asarray(cv2.perspectiveTransform(xy.reshape(-1, 1, 2), H), np.float32).reshape(xy.shape)
-    hw, hh = s.half_w / s.texel_m, s.half_h / s.texel_m
-    if s.shape == "disc":
-        ex, ey = mxy[..., 0] - np.float32(tw / 2.0), mxy[..., 1] - np.float32(th / 2.0)
-        hit = ex * ex + ey * ey <= np.float32(hw * hw)
-    else:
-        hit = cv2.inRange(mxy, (tw / 2.0 - hw, th / 2.0 - hh), (tw / 2.0 + hw, th / 2.0 + hh)) > 0
-    if s.sway is not None:  # texture displacement in metres at plane coordinates (a, b)
-        a = (mxy[..., 0] - np.float32(tw / 2.0)) * np.float32(s.texel_m)
-        b = (mxy[..., 1] - np.float32(th / 2.0)) * np.float32(s.texel_m)
-        da, db = s.sway(t, a, b)
-        mxy = np.dstack([mxy[..., 0] + da / np.float32(s.texel_m), mxy[..., 1] + db / np.float32(s.texel_m)])
-    val = cv2.remap(s._tex32, mxy.astype(np.float32), None, cv2.INTER_LINEAR,  # type: ignore[call-overload]
-                    borderMode=cv2.BORDER_REFLECT101)
-    den = n_c[0] * xy[..., 0] + n_c[1] * xy[..., 1] + np.float32(n_c[2])
-    with np.errstate(divide="ignore"):
-        dist = (np.float32(q) / den) * view.ray_len[y0:y1, x0:x1]
-    d_roi = depth[y0:y1, x0:x1]
-    hit &= (dist > 0.05) & (dist < d_roi)
-    np.copyto(d_roi, dist, where=hit)
-    np.copyto(img[y0:y1, x0:x1], np.rint(val) if img.dtype == np.uint8 else val, where=hit, casting="unsafe")
-    if ids is not None:
-        ids[y0:y1, x0:x1][hit] = s.target_id
-
-
-_EDGE = np.linspace(0.0, 1.0, 9)
-_BOX_X = np.concatenate([_EDGE, np.ones(9), _EDGE, np.zeros(9)])  # 9 points along each side of a unit box
-_BOX_Y = np.concatenate([np.zeros(9), _EDGE, np.ones(9), _EDGE])
-
-
-def _pixel_box(view: _View, pts_rig: F64, pad: int = 2) -> tuple[int, int, int, int] | None:
-    """Pixel bounding box (x0, y0, x1, y1) of rig-frame points (N, 3) as seen by `view`, or None when
-    they are all outside the image; the whole image when some point is behind the camera."""
-    cam = view.cam
-    w, h = cam.size
-    Xc = (pts_rig - cam.c) @ cam.R_rc.T
-    if np.any(Xc[:, 2] <= 0.05):
-        return 0, 0, w, h
-    xn, yn = Xc[:, 0] / Xc[:, 2], Xc[:, 1] / Xc[:, 2]
-    x0, x1 = max(xn.min(), view.xn_range[0]), min(xn.max(), view.xn_range[1])
-    y0, y1 = max(yn.min(), view.yn_range[0]), min(yn.max(), view.yn_range[1])
-    if x0 >= x1 or y0 >= y1:
-        return None
-    u, v = cam.distort_normalized(x0 + (x1 - x0) * _BOX_X, y0 + (y1 - y0) * _BOX_Y)
-    box = (max(int(u.min()) - pad, 0), max(int(v.min()) - pad, 0),
-           min(int(np.ceil(u.max())) + pad + 1, w), min(int(np.ceil(v.max())) + pad + 1, h))
-    return box if box[0] < box[2] and box[1] < box[3] else None
-
-
-def cast_surface_exact(view: _View, R_wr: F64, s: Surface, t: float, img: F32 | U8, depth: F32, ids: U8 | None,
-                  origin: tuple[int, int] = (0, 0)) -> None:
-    """Ray-cast one surface into img/depth/ids (in place), z-tested, intersecting every pixel's ray with
-    the plane: the reference the fast renderer (_cast_plane_fast) is tested against. The buffers cover
-    the image window whose top-left pixel is `origin`; only the surface's bounding box is cast."""
-    box = _pixel_box(view, s.corners() @ R_wr)  # world -> rig is R_wr.T @ p (row vectors)
-    if box is None:
-        return
-    ox, oy = origin
-    h, w = img.shape
-    x0, y0 = max(box[0], ox), max(box[1], oy)
-    x1, y1 = min(box[2], ox + w), min(box[3], oy + h)
-    if x0 >= x1 or y0 >= y1:
-        return
-    rays = view.rays[y0:y1, x0:x1].reshape(-1, 3).astype(np.float64) @ R_wr.T
-    dist, val, hit = s.intersect(R_wr @ view.cam.c, rays, t)
-    win = (slice(y0 - oy, y1 - oy), slice(x0 - ox, x1 - ox))
-    d_roi = depth[win].reshape(-1)
-    hit &= dist < d_roi
-    if not hit.any():
-        return
-    shape = (y1 - y0, x1 - x0)
-    d_roi[hit] = dist[hit]
-    depth[win] = d_roi.reshape(shape)
-    i_roi = img[win].reshape(-1)
-    i_roi[hit] = np.rint(val[hit]) if img.dtype == np.uint8 else val[hit]
-    img[win] = i_roi.reshape(shape)
-    if ids is not None:
-        id_roi = ids[win].reshape(-1)
-        id_roi[hit] = s.target_id
-        ids[win] = id_roi.reshape(shape)
 
 
 class _Bands:
@@ -254,7 +128,7 @@ class SimRenderer:
     def __init__(self, rig: StereoRig, static: list[Surface], seed: int, noise_sigma: float = 1.2):
         self.rig = rig
         self.static = static
-        self.views = (_make_view(rig.left), _make_view(rig.right))
+        self.views = (make_view(rig.left), make_view(rig.right))
         self._scene = StaticScene([v.cam for v in self.views], static)
         self._cache: dict[tuple[float, float], tuple[list[U8], list[F32]]] = {}
         rng = np.random.default_rng(seed + 7919)
@@ -313,7 +187,7 @@ class SimRenderer:
         if plan.rest:  # what the static renderer cannot take (discs, swaying, too near), cast per pixel
             depth = view.ray_len / inv_z
             for surface in plan.rest:
-                _cast_plane_fast(view, R_wr, surface, img, depth)
+                cast_plane_fast(view, R_wr, surface, img, depth)
             inv_z = view.ray_len / depth
         return img, inv_z
 
@@ -418,7 +292,7 @@ class SimRenderer:
         over their bounding boxes: the static depth is filled in for the window around them all. Solids
         (tracker.sim.bodies) cast themselves, z-tested in the same depth."""
         view = self.views[k]
-        cast = [(s, b) for s, b in ((s, _pixel_box(view, s.corners() @ R_wr)) for s in moving) if b is not None]
+        cast = [(s, b) for s, b in ((s, pixel_box(view, s.corners() @ R_wr)) for s in moving) if b is not None]
         self.windows[k] = None
         if not cast:
             return
@@ -429,7 +303,7 @@ class SimRenderer:
         np.divide(view.ray_len[y0:y1, x0:x1], base_inv[y0:y1, x0:x1], out=depth[y0:y1, x0:x1])
         for s, b in cast:
             if isinstance(s, Surface):
-                _cast_plane_fast(view, R_wr, s, img8, depth, t, ids, b)
+                cast_plane_fast(view, R_wr, s, img8, depth, t, ids, b)
             else:
                 s.cast(view, R_wr, img8, depth, t, ids, b)
         self.windows[k] = (x0, y0, x1, y1)
