@@ -17,9 +17,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tmeye.media.encoder import EncodedFrame, H264Encoder, pts_of, stamp
+from tmeye.runtime.events import FrameEvent
 from tmeye.runtime.publish import Hub
 from tmeye.runtime.threads import lower_priority
-from tmeye.runtime.worker import FrameEvent, Runtime
+from tmeye.runtime.worker import Runtime
 
 log = logging.getLogger("tmeye.media")
 CAMERAS = ("left", "right")

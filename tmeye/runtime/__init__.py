@@ -4,9 +4,10 @@ control (`ServoControl`) and the per-frame telemetry."""
 
 from tmeye.runtime.compose import ComposeError, Composition, compose
 from tmeye.runtime.config import RuntimeConfig, TrackerTuning
+from tmeye.runtime.events import FrameEvent, ServoState
 from tmeye.runtime.publish import Hub, Subscription
 from tmeye.runtime.servo import ServoMode, ServoRequestError
-from tmeye.runtime.worker import FrameEvent, NoServoError, Runtime, ServoState
+from tmeye.runtime.worker import NoServoError, Runtime
 
 __all__ = ["ComposeError", "Composition", "FrameEvent", "Hub", "NoServoError", "Runtime", "RuntimeConfig",
            "ServoMode", "ServoRequestError", "ServoState", "Subscription", "TrackerTuning", "compose"]

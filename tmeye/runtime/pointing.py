@@ -14,7 +14,7 @@ from tracker.frames import GimbalState
 
 if TYPE_CHECKING:
     from tmeye.runtime.compose import Composition
-    from tmeye.runtime.worker import FrameEvent
+    from tmeye.runtime.events import FrameEvent
 
 DEFAULT_POINT_DISTANCE_M = 20.0
 

@@ -12,7 +12,6 @@ after it the pacing starts afresh (the frames missed meanwhile are not counted a
 
 from __future__ import annotations
 
-import json
 import logging
 import math
 import queue
@@ -20,12 +19,11 @@ import threading
 import time
 from collections.abc import Callable
 from concurrent.futures import Future
-from dataclasses import dataclass
-from functools import cached_property
 from typing import Any, TypeVar
 
 from tmeye.runtime.compose import Composition, apply_tuning, compose, describe_source, rebuild_pipeline
 from tmeye.runtime.config import RuntimeConfig, TrackerTuning
+from tmeye.runtime.events import FrameEvent, ServoState
 from tmeye.runtime.faults import SourceHealth
 from tmeye.runtime.pointing import pixel_angles
 from tmeye.runtime.publish import Hub
@@ -35,7 +33,6 @@ from tmeye.runtime.telemetry import detection_json, telemetry
 from tracker.closedloop import LoopStep
 from tracker.frames import StereoFrame
 from tracker.geometry import StereoRig
-from tracker.pipeline import FrameResult
 
 log = logging.getLogger("tmeye.runtime")
 R = TypeVar("R")
@@ -43,46 +40,6 @@ BETWEEN_FRAMES_MARGIN_S = 0.004  # work between frames ends this long before the
 # ... and starts this long after the frame is published: the telemetry WebSockets send it meanwhile, on
 # the event loop, without this thread's Python code taking the interpreter's lock between theirs
 BETWEEN_FRAMES_DELAY_S = 0.003
-
-
-@dataclass(frozen=True)
-class ServoState:
-    """The mount at a frame: mode, angles (deg) at capture, the operator's goal (deg), the fault and the
-    command sent this frame ({pan_deg, tilt_deg, reason} or None)."""
-
-    mode: str
-    pan_deg: float
-    tilt_deg: float
-    goal: tuple[float, float] | None
-    fault: str | None
-    command: dict[str, Any] | None = None
-
-    def as_dict(self) -> dict[str, Any]:
-        return {"mode": self.mode, "pan_deg": round(self.pan_deg, 4), "tilt_deg": round(self.tilt_deg, 4),
-                "goal": None if self.goal is None else {"pan_deg": self.goal[0], "tilt_deg": self.goal[1]},
-                "command": self.command, "fault": self.fault}
-
-
-@dataclass(frozen=True)
-class FrameEvent:
-    """What the worker publishes per frame. frame_no: strictly increasing over the runtime's life (gaps
-    are skipped frames); captured_at / done_at: Unix time (s) of the capture and of the end of the
-    processing; telemetry: the JSON message of the frame."""
-
-    frame_no: int
-    frame: StereoFrame
-    result: FrameResult
-    step: LoopStep | None
-    servo: ServoState | None
-    captured_at: float
-    done_at: float
-    telemetry: dict[str, Any]
-    generation: int = 0  # incremented when a new pipeline (rig) is swapped in: track ids restart
-
-    @cached_property
-    def telemetry_json(self) -> str:
-        """The telemetry as JSON text, made once however many clients send it."""
-        return json.dumps(self.telemetry, separators=(",", ":"))
 
 
 class Runtime:
