@@ -20,6 +20,16 @@ const PRIMARY = "#ffb020";
 const OTHER = "#4fd1ff";
 const AIM = "rgba(140, 255, 160, 0.9)";
 
+/** The canvas's scale: source pixel (u, v) to canvas pixel (X(u), Y(v)), letterboxed like the picture. */
+interface Frame {
+  X: (u: number) => number;
+  Y: (v: number) => number;
+  s: number;
+  dpr: number;
+  font: number;
+  ch: number;
+}
+
 export function drawOverlay(canvas: HTMLCanvasElement, o: OverlayInput): void {
   const dpr = window.devicePixelRatio || 1;
   const cw = Math.max(1, Math.round(canvas.clientWidth * dpr));
@@ -34,33 +44,11 @@ export function drawOverlay(canvas: HTMLCanvasElement, o: OverlayInput): void {
   const s = Math.min(cw / o.srcW, ch / o.srcH);
   const ox = (cw - o.srcW * s) / 2;
   const oy = (ch - o.srcH * s) / 2;
-  const X = (u: number) => ox + u * s;
-  const Y = (v: number) => oy + v * s;
   const font = Math.max(11, Math.round(12 * dpr * Math.min(1.4, Math.max(0.8, cw / (640 * dpr)))));
+  const f: Frame = { X: (u) => ox + u * s, Y: (v) => oy + v * s, s, dpr, font, ch };
   ctx.font = `${font}px ui-monospace, SFMono-Regular, Menlo, Consolas, monospace`;
   ctx.textBaseline = "top";
-
-  // aim zone: the deadband about the image centre
-  const r = Math.max(4, o.deadbandFrac * o.srcW) * s;
-  ctx.strokeStyle = AIM;
-  ctx.lineWidth = 1.5 * dpr;
-  ctx.setLineDash([5 * dpr, 4 * dpr]);
-  ctx.beginPath();
-  ctx.arc(X(o.srcW / 2), Y(o.srcH / 2), r, 0, 2 * Math.PI);
-  ctx.stroke();
-  ctx.setLineDash([]);
-  const t = 6 * dpr;
-  ctx.beginPath();
-  ctx.moveTo(X(o.srcW / 2) - r - t, Y(o.srcH / 2));
-  ctx.lineTo(X(o.srcW / 2) - r, Y(o.srcH / 2));
-  ctx.moveTo(X(o.srcW / 2) + r, Y(o.srcH / 2));
-  ctx.lineTo(X(o.srcW / 2) + r + t, Y(o.srcH / 2));
-  ctx.moveTo(X(o.srcW / 2), Y(o.srcH / 2) - r - t);
-  ctx.lineTo(X(o.srcW / 2), Y(o.srcH / 2) - r);
-  ctx.moveTo(X(o.srcW / 2), Y(o.srcH / 2) + r);
-  ctx.lineTo(X(o.srcW / 2), Y(o.srcH / 2) + r + t);
-  ctx.stroke();
-
+  drawAimZone(ctx, o, f);
   const tel = o.tel;
   if (!tel) {
     label(ctx, "waiting for telemetry", 8 * dpr, 8 * dpr, "#ddd");
@@ -68,22 +56,55 @@ export function drawOverlay(canvas: HTMLCanvasElement, o: OverlayInput): void {
   }
   if (o.camera === "left") {
     for (const d of tel.detections ?? []) drawDetection(ctx, d, d.track_id === tel.track_id, d.track_id === o.hoverId,
-      X, Y, dpr);
+      f.X, f.Y, dpr);
     const p = tel.detections?.find((d) => d.track_id === tel.track_id);
-    if (p) {
-      const [cu, cv] = p.centroid;
-      const a = 9 * dpr;
-      ctx.strokeStyle = PRIMARY;
-      ctx.lineWidth = 2 * dpr;
-      ctx.beginPath();
-      ctx.moveTo(X(cu) - a, Y(cv));
-      ctx.lineTo(X(cu) + a, Y(cv));
-      ctx.moveTo(X(cu), Y(cv) - a);
-      ctx.lineTo(X(cu), Y(cv) + a);
-      ctx.stroke();
-    }
+    if (p) drawCross(ctx, p.centroid, f);
   }
-  // readouts of the primary target
+  drawReadouts(ctx, o, tel, f);
+}
+
+/** The aim zone: the dead band about the image centre, a dashed circle with ticks. */
+function drawAimZone(ctx: CanvasRenderingContext2D, o: OverlayInput, f: Frame): void {
+  const { X, Y, dpr } = f;
+  const r = Math.max(4, o.deadbandFrac * o.srcW) * f.s;
+  const cx = X(o.srcW / 2), cy = Y(o.srcH / 2);
+  ctx.strokeStyle = AIM;
+  ctx.lineWidth = 1.5 * dpr;
+  ctx.setLineDash([5 * dpr, 4 * dpr]);
+  ctx.beginPath();
+  ctx.arc(cx, cy, r, 0, 2 * Math.PI);
+  ctx.stroke();
+  ctx.setLineDash([]);
+  const t = 6 * dpr;
+  ctx.beginPath();
+  ctx.moveTo(cx - r - t, cy);
+  ctx.lineTo(cx - r, cy);
+  ctx.moveTo(cx + r, cy);
+  ctx.lineTo(cx + r + t, cy);
+  ctx.moveTo(cx, cy - r - t);
+  ctx.lineTo(cx, cy - r);
+  ctx.moveTo(cx, cy + r);
+  ctx.lineTo(cx, cy + r + t);
+  ctx.stroke();
+}
+
+/** The primary target's centroid (eq. 10), a cross. */
+function drawCross(ctx: CanvasRenderingContext2D, [cu, cv]: number[], f: Frame): void {
+  const { X, Y, dpr } = f;
+  const a = 9 * dpr;
+  ctx.strokeStyle = PRIMARY;
+  ctx.lineWidth = 2 * dpr;
+  ctx.beginPath();
+  ctx.moveTo(X(cu) - a, Y(cv));
+  ctx.lineTo(X(cu) + a, Y(cv));
+  ctx.moveTo(X(cu), Y(cv) - a);
+  ctx.lineTo(X(cu), Y(cv) + a);
+  ctx.stroke();
+}
+
+/** The primary target's r, θ, φ with their 1-σ, speed and heading (left camera), and the frame, bottom left. */
+function drawReadouts(ctx: CanvasRenderingContext2D, o: OverlayInput, tel: Telemetry, f: Frame): void {
+  const { dpr, font, ch } = f;
   const lines: string[] = o.camera === "right" ? [] : tel.detected && tel.r != null
     ? [
         `#${tel.track_id ?? "—"}  r ${num(tel.r, 2)} ± ${num(tel.sigma_r, 2)} m`,
