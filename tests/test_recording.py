@@ -63,9 +63,11 @@ def test_segments_decode_and_match_telemetry(server: Server) -> None:
         dropped0 = media_dropped(c)
     seen = captured_frames(server, 8.0)  # while recording
     with server.as_admin() as c:
-        dropped = media_dropped(c) - dropped0
         time.sleep(4.0)  # the segments holding those frames close
         segs = closed_segments(c, 4)
+        # counted once the window's frames have passed the media thread: on a busy machine it may drop one
+        # seen near the window's end after the window (CI: 5 missing against 4 counted at its end)
+        dropped = media_dropped(c) - dropped0
         st = c.get("/api/status").json()["recording"]
         assert st["state"] == "recording" and st["fault"] is None and st["mode"] == "continuous"
         tel = telemetry_by_pts(c, min(s["start"] for s in segs), max(s["end"] for s in segs))
