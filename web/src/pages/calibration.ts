@@ -8,6 +8,72 @@ import { atLeast, roleReason } from "../lib/session";
 import { ReconnectingSocket } from "../lib/socket";
 import type { Page, PageContext } from "./types";
 
+/** A record's result in a few words: its RMS reprojection error, or why it failed. */
+function summary(c: CalibrationOut): string {
+  if (c.status === "failed") return c.error ?? "failed";
+  if (c.status === "running") return "running…";
+  const rep = (c.report ?? {}) as Record<string, unknown>;
+  const rms = rep.rms_px ?? rep.stereo_rms_px ?? rep.rms;
+  return typeof rms === "number" ? `RMS ${num(rms, 3)} px` : "done";
+}
+
+/** A calibration record's row: download its rig file (done), activate it (done, not active; activate: what
+ * does it, or why this session may not). */
+function calibrationRow(c: CalibrationOut, activate: ((id: number) => Promise<void>) | string): HTMLTableRowElement {
+  const may = typeof activate !== "string";
+  return h("tr", null, h("th", { scope: "row" }, String(c.id)),
+    h("td", null, time(c.created_at)), h("td", null, c.status), h("td", null, `${c.board}, ${num(c.square_m * 1000, 1)} mm`),
+    h("td", null, String(c.images)), h("td", { class: "detail" }, summary(c)), h("td", null, c.active ? "active" : ""),
+    h("td", null, h("div", { class: "actions" },
+      c.status === "done" ? h("a", { href: api.rigUrl(c.id), download: `rig-${c.id}.json`, class: "button small" },
+        "Download rig", h("span", { class: "sr-only" }, ` of calibration ${c.id}`)) : null,
+      c.status === "done" && !c.active ? h("button", { type: "button", class: "small", disabled: !may,
+        title: may ? undefined : activate, "aria-label": `Activate calibration ${c.id}`,
+        onclick: () => { if (may) void activate(c.id); } }, "Activate") : null)));
+}
+
+/** The progress of the calibration uploaded last (or of any, before an upload) from /ws/events. */
+function calibrationProgress(): { progress: HTMLProgressElement; text: HTMLElement; started(id: number): void;
+  onEvent(ev: ServerEvent): boolean } {
+  const progress = h("progress", { max: 1, value: 0, "aria-label": "Calibration progress", hidden: true });
+  const text = h("p", { class: "muted", role: "status", "aria-live": "polite", "data-testid": "cal-progress" });
+  let watching: number | null = null;
+  return {
+    progress, text,
+    started(id) {
+      watching = id;
+      progress.hidden = false;
+      progress.removeAttribute("value");
+      text.textContent = `Calibration #${id} started.`;
+    },
+    /** Show an event; true when a calibration ended (done or failed): the records changed. */
+    onEvent(ev) {
+      if (!ev.type?.startsWith("calibration.")) return false;
+      if (watching !== null && ev.id !== watching) return false;
+      if (ev.type === "calibration.progress") {
+        const msg = String(ev.message ?? "");
+        const m = /(\d+)\s*\/\s*(\d+)/.exec(msg);
+        progress.hidden = false;
+        if (m && Number(m[2]) > 0) progress.value = Number(m[1]) / Number(m[2]);
+        else progress.removeAttribute("value");
+        text.textContent = `Calibration #${ev.id}: ${msg}`;
+        return false;
+      }
+      if (ev.type === "calibration.done") {
+        progress.value = 1;
+        text.textContent = `Calibration #${ev.id} done.`;
+        return true;
+      }
+      if (ev.type === "calibration.failed") {
+        progress.hidden = true;
+        text.textContent = `Calibration #${ev.id} failed: ${ev.message ?? "see the record"}`;
+        return true;
+      }
+      return false;
+    },
+  };
+}
+
 export function calibrationPage(ctx: PageContext): Page {
   const { root, session, status } = ctx;
   const canEdit = atLeast(session, "admin");
@@ -23,8 +89,7 @@ export function calibrationPage(ctx: PageContext): Page {
       h("legend", { class: "sr-only" }, "New calibration"),
       field("Left images", left, "in the same order as the right ones"), field("Right images", right),
       field("Board (inner corners)", board, "COLSxROWS, e.g. 9x6"), field("Square size (m)", square), submit));
-  const progress = h("progress", { max: 1, value: 0, "aria-label": "Calibration progress", hidden: true });
-  const progressText = h("p", { class: "muted", role: "status", "aria-live": "polite", "data-testid": "cal-progress" });
+  const watch = calibrationProgress();
   const tbody = h("tbody");
   const table = h("table", { class: "data" }, h("caption", { class: "sr-only" }, "Calibrations, newest first"),
     h("thead", null, h("tr", null, ...["#", "Created", "Status", "Board", "Pairs", "Result", "Active", ""].map((c) =>
@@ -33,29 +98,11 @@ export function calibrationPage(ctx: PageContext): Page {
     h("section", { class: "panel", "aria-labelledby": "upload-title" }, h("h2", { id: "upload-title" }, "New calibration"),
       canEdit ? h("p", { class: "muted" }, "Upload pairs of chessboard photos taken by the left and right cameras at the same moments.")
         : h("p", { class: "reason", role: "note", "data-testid": "cal-reason" }, roleReason(session, "admin", "Calibrating")),
-      form, progress, progressText),
+      form, watch.progress, watch.text),
     msg, h("div", { class: "table-wrap" }, table)));
 
-  let watching: number | null = null;
   const onEvent = (ev: ServerEvent) => {
-    if (!ev.type?.startsWith("calibration.")) return;
-    if (watching !== null && ev.id !== watching) return;
-    if (ev.type === "calibration.progress") {
-      const text = String(ev.message ?? "");
-      const m = /(\d+)\s*\/\s*(\d+)/.exec(text);
-      progress.hidden = false;
-      if (m && Number(m[2]) > 0) progress.value = Number(m[1]) / Number(m[2]);
-      else progress.removeAttribute("value");
-      progressText.textContent = `Calibration #${ev.id}: ${text}`;
-    } else if (ev.type === "calibration.done") {
-      progress.value = 1;
-      progressText.textContent = `Calibration #${ev.id} done.`;
-      void load();
-    } else if (ev.type === "calibration.failed") {
-      progress.hidden = true;
-      progressText.textContent = `Calibration #${ev.id} failed: ${ev.message ?? "see the record"}`;
-      void load();
-    }
+    if (watch.onEvent(ev)) void load();
   };
   const socket = new ReconnectingSocket<ServerEvent>({ path: "/ws/events", onMessage: onEvent,
     onState: (s) => status.slot("events", s === "open" ? "Events: connected" : "Events: reconnecting…", s === "open" ? "ok" : "warn") });
@@ -77,10 +124,7 @@ export function calibrationPage(ctx: PageContext): Page {
     msg.show(`Uploading ${lf.length} pairs…`, "info");
     try {
       const rec = await api.uploadCalibration(fd);
-      watching = rec.id;
-      progress.hidden = false;
-      progress.removeAttribute("value");
-      progressText.textContent = `Calibration #${rec.id} started.`;
+      watch.started(rec.id);
       msg.show(`Uploaded: calibration #${rec.id} is running.`, "ok");
       void load();
     } catch (e) {
@@ -90,13 +134,15 @@ export function calibrationPage(ctx: PageContext): Page {
     }
   });
 
-  const summary = (c: CalibrationOut): string => {
-    if (c.status === "failed") return c.error ?? "failed";
-    if (c.status === "running") return "running…";
-    const rep = (c.report ?? {}) as Record<string, unknown>;
-    const rms = rep.rms_px ?? rep.stereo_rms_px ?? rep.rms;
-    return typeof rms === "number" ? `RMS ${num(rms, 3)} px` : "done";
-  };
+  const activate = canEdit ? async (id: number) => {
+    try {
+      await api.activateCalibration(id);
+      msg.show(`Calibration #${id} is now the tracker's rig.`, "ok");
+      void load();
+    } catch (e) {
+      msg.show(`Not activated: ${errorText(e)}`, "bad");
+    }
+  } : roleReason(session, "admin", "Activating a calibration");
 
   async function load(): Promise<void> {
     let list: CalibrationOut[];
@@ -106,23 +152,7 @@ export function calibrationPage(ctx: PageContext): Page {
       msg.show(`Calibrations could not be loaded: ${errorText(e)}`, "bad");
       return;
     }
-    tbody.replaceChildren(...(list.length ? list.map((c) => h("tr", null, h("th", { scope: "row" }, String(c.id)),
-      h("td", null, time(c.created_at)), h("td", null, c.status), h("td", null, `${c.board}, ${num(c.square_m * 1000, 1)} mm`),
-      h("td", null, String(c.images)), h("td", { class: "detail" }, summary(c)), h("td", null, c.active ? "active" : ""),
-      h("td", null, h("div", { class: "actions" },
-        c.status === "done" ? h("a", { href: api.rigUrl(c.id), download: `rig-${c.id}.json`, class: "button small" },
-          "Download rig", h("span", { class: "sr-only" }, ` of calibration ${c.id}`)) : null,
-        c.status === "done" && !c.active ? h("button", { type: "button", class: "small", disabled: !canEdit,
-          title: canEdit ? undefined : roleReason(session, "admin", "Activating a calibration"),
-          "aria-label": `Activate calibration ${c.id}`, onclick: async () => {
-            try {
-              await api.activateCalibration(c.id);
-              msg.show(`Calibration #${c.id} is now the tracker's rig.`, "ok");
-              void load();
-            } catch (e) {
-              msg.show(`Not activated: ${errorText(e)}`, "bad");
-            }
-          } }, "Activate") : null))))
+    tbody.replaceChildren(...(list.length ? list.map((c) => calibrationRow(c, activate))
       : [h("tr", null, h("td", { colSpan: 8, class: "muted" }, "No calibrations yet."))]));
   }
   void load();

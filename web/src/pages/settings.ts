@@ -28,6 +28,34 @@ const SECTIONS: { key: Section; schema: string; title: string }[] = [
 const schemas = (openapi as unknown as { components: { schemas: Record<string, { properties: Record<string, Prop> }> } })
   .components.schemas;
 
+/** One setting's labelled number input, with its limits, description and default as a hint. */
+function settingField(key: Section, name: string, prop: Prop, canEdit: boolean): { row: HTMLElement; input: HTMLInputElement } {
+  const id = uid("set");
+  const input = h("input", { id, name: `${key}.${name}`, type: "number", required: true,
+    step: prop.type === "integer" ? 1 : "any",
+    min: prop.minimum ?? prop.exclusiveMinimum, max: prop.maximum, readOnly: !canEdit,
+    "aria-describedby": `${id}-hint` });
+  const limits = [prop.minimum !== undefined ? `≥ ${prop.minimum}` : prop.exclusiveMinimum !== undefined
+    ? `> ${prop.exclusiveMinimum}` : "", prop.maximum !== undefined ? `≤ ${prop.maximum}` : ""].filter(Boolean).join(", ");
+  const row = h("div", { class: "field setting" },
+    h("label", { for: id }, prop.title ?? name, h("code", { class: "muted small" }, ` ${name}`)), input,
+    h("small", { class: "hint", id: `${id}-hint` },
+      [prop.description, limits, prop.default !== undefined ? `default ${prop.default}` : ""].filter(Boolean).join("; ")));
+  return { row, input };
+}
+
+/** The settings whose inputs differ from `current` (empty inputs left out), by section: a PATCH body. */
+function changes(inputs: Iterable<{ section: Section; name: string; input: HTMLInputElement }>, current: TrackerSettings
+): Record<string, Record<string, number>> {
+  const patch: Record<string, Record<string, number>> = {};
+  for (const { section, name, input } of inputs) {
+    const old = (current[section] as Record<string, unknown>)[name];
+    if (input.value === "" || String(old) === input.value) continue;
+    (patch[section] ??= {})[name] = Number(input.value);
+  }
+  return patch;
+}
+
 export function settingsPage(ctx: PageContext): Page {
   const { root, session } = ctx;
   const canEdit = atLeast(session, "admin");
@@ -38,18 +66,9 @@ export function settingsPage(ctx: PageContext): Page {
   const fieldsets = SECTIONS.map(({ key, schema, title }) => {
     const props = schemas[schema]?.properties ?? {};
     const rows = Object.entries(props).map(([name, prop]) => {
-      const id = uid("set");
-      const input = h("input", { id, name: `${key}.${name}`, type: "number", required: true,
-        step: prop.type === "integer" ? 1 : "any",
-        min: prop.minimum ?? prop.exclusiveMinimum, max: prop.maximum, readOnly: !canEdit,
-        "aria-describedby": `${id}-hint` });
+      const { row, input } = settingField(key, name, prop, canEdit);
       inputs.set(`${key}.${name}`, { section: key, name, input, prop });
-      const limits = [prop.minimum !== undefined ? `≥ ${prop.minimum}` : prop.exclusiveMinimum !== undefined
-        ? `> ${prop.exclusiveMinimum}` : "", prop.maximum !== undefined ? `≤ ${prop.maximum}` : ""].filter(Boolean).join(", ");
-      return h("div", { class: "field setting" },
-        h("label", { for: id }, prop.title ?? name, h("code", { class: "muted small" }, ` ${name}`)), input,
-        h("small", { class: "hint", id: `${id}-hint` },
-          [prop.description, limits, prop.default !== undefined ? `default ${prop.default}` : ""].filter(Boolean).join("; ")));
+      return row;
     });
     return h("fieldset", { class: "panel settings-group" }, h("legend", null, title), ...rows);
   });
@@ -98,12 +117,7 @@ export function settingsPage(ctx: PageContext): Page {
   form.addEventListener("submit", async (ev) => {
     ev.preventDefault();
     if (!canEdit || !current) return;
-    const patch: Record<string, Record<string, number>> = {};
-    for (const { section, name, input } of inputs.values()) {
-      const old = (current[section] as Record<string, unknown>)[name];
-      if (input.value === "" || String(old) === input.value) continue;
-      (patch[section] ??= {})[name] = Number(input.value);
-    }
+    const patch = changes(inputs.values(), current);
     if (!Object.keys(patch).length) {
       msg.show("Nothing changed.", "info");
       return;
