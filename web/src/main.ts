@@ -1,6 +1,6 @@
 // The console's shell: session check, navigation (hash routes), one module per page, the status bar.
 import "./styles.css";
-import { ApiError, onUnauthorized } from "./api/client";
+import { errorText, onUnauthorized } from "./api/client";
 import { alarmCenter } from "./lib/alarms";
 import { AlarmBanner } from "./lib/banner";
 import { h } from "./lib/dom";
@@ -136,7 +136,7 @@ async function boot(): Promise<void> {
       session = await current();
       break;
     } catch (e) {
-      const why = e instanceof ApiError ? e.detail : String(e);
+      const why = errorText(e);
       app.replaceChildren(h("section", { class: "login-page" }, h("p", { role: "status" },
         `The server cannot be reached (${why}); retrying (${attempt})…`)));
       await new Promise((r) => setTimeout(r, 2000));

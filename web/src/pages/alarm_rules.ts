@@ -1,6 +1,6 @@
 // Alarm rules for admins (part of the Alarms page): the list with enabled / out-of-service switches and
 // delete (the built-in device fault rules: out of service only), each rule's alarm state, and a form for a new rule whose fields follow the chosen condition (metres, m/s, seconds).
-import { api, ApiError } from "../api/client";
+import { api, errorText } from "../api/client";
 import type { AlarmRuleIn, AlarmRuleOut, Priority } from "../api/types";
 import { PRIORITIES } from "../lib/alarms";
 import { field, h } from "../lib/dom";
@@ -54,7 +54,7 @@ export function rulesPanel(msg: Notice): HTMLElement {
   kind.addEventListener("change", showFields);
   showFields();
 
-  const fail = (what: string, e: unknown) => msg.show(`${what}: ${e instanceof ApiError ? e.detail : String(e)}`, "bad");
+  const fail = (what: string, e: unknown) => msg.show(`${what}: ${errorText(e)}`, "bad");
 
   async function load(): Promise<void> {
     let rules: AlarmRuleOut[];
