@@ -95,9 +95,7 @@ class Camera:
         middles of the image's opposite edges (pixel edges -0.5 and size - 0.5), lens distortion included."""
         w, h = self.size
         cx, cy = float(self.K[0, 2]), float(self.K[1, 2])
-        xn, yn = self.undistort_pixels(np.array([-0.5, w - 0.5, cx, cx]), np.array([cy, cy, -0.5, h - 0.5]))
-        rays = np.stack([xn, yn, np.ones(4)], axis=1)
-        rays /= np.linalg.norm(rays, axis=1, keepdims=True)
+        rays = self.rays_rig(np.array([-0.5, w - 0.5, cx, cx]), np.array([cy, cy, -0.5, h - 0.5]))  # unit, (4, 3)
         return (float(np.degrees(np.arccos(np.clip(rays[0] @ rays[1], -1.0, 1.0)))),
                 float(np.degrees(np.arccos(np.clip(rays[2] @ rays[3], -1.0, 1.0)))))
 

@@ -43,11 +43,11 @@ def make_view(cam: Camera) -> View:
     (xv, xu), (yv, yu) = np.gradient(xn), np.gradient(yn)  # d/dv (rows), d/du (columns)
     area = np.abs(xu * yv - xv * yu).astype(np.float32)
     return View(cam, rays, (float(xn.min()) - 0.02, float(xn.max()) + 0.02),
-                 (float(yn.min()) - 0.02, float(yn.max()) + 0.02), xy, ray_len, area)
+                (float(yn.min()) - 0.02, float(yn.max()) + 0.02), xy, ray_len, area)
 
 
 def cast_plane_fast(view: View, R_wr: F64, s: Surface, img: F32 | U8, depth: F32, t: float = 0.0,
-                     ids: U8 | None = None, box: tuple[int, int, int, int] | None = None) -> None:
+                    ids: U8 | None = None, box: tuple[int, int, int, int] | None = None) -> None:
     """Ray-cast a rectangular surface over its bounding box with OpenCV calls: on a plane the texture
     coordinates are a homography of the undistorted normalised coordinates (x_n, y_n), and 1/depth is
     linear in them. Same result as cast_surface_exact (sway included), many times faster for large areas."""
@@ -115,7 +115,7 @@ def pixel_box(view: View, pts_rig: F64, pad: int = 2) -> tuple[int, int, int, in
 
 
 def cast_surface_exact(view: View, R_wr: F64, s: Surface, t: float, img: F32 | U8, depth: F32, ids: U8 | None,
-                  origin: tuple[int, int] = (0, 0)) -> None:
+                       origin: tuple[int, int] = (0, 0)) -> None:
     """Ray-cast one surface into img/depth/ids (in place), z-tested, intersecting every pixel's ray with
     the plane: the reference the fast renderer (cast_plane_fast) is tested against. The buffers cover
     the image window whose top-left pixel is `origin`; only the surface's bounding box is cast."""

@@ -17,19 +17,18 @@ function summary(c: CalibrationOut): string {
   return typeof rms === "number" ? `RMS ${num(rms, 3)} px` : "done";
 }
 
-/** A calibration record's row: download its rig file (done), activate it (done, not active; activate: what
- * does it, or why this session may not). */
-function calibrationRow(c: CalibrationOut, activate: ((id: number) => Promise<void>) | string): HTMLTableRowElement {
-  const may = typeof activate !== "string";
+/** A calibration record's row: download its rig file (done), activate it (done, not active; refusal: why this
+ * session may not, null when it may). */
+function calibrationRow(c: CalibrationOut, refusal: string | null, activate: (id: number) => void): HTMLTableRowElement {
   return h("tr", null, h("th", { scope: "row" }, String(c.id)),
     h("td", null, time(c.created_at)), h("td", null, c.status), h("td", null, `${c.board}, ${num(c.square_m * 1000, 1)} mm`),
     h("td", null, String(c.images)), h("td", { class: "detail" }, summary(c)), h("td", null, c.active ? "active" : ""),
     h("td", null, h("div", { class: "actions" },
       c.status === "done" ? h("a", { href: api.rigUrl(c.id), download: `rig-${c.id}.json`, class: "button small" },
         "Download rig", h("span", { class: "sr-only" }, ` of calibration ${c.id}`)) : null,
-      c.status === "done" && !c.active ? h("button", { type: "button", class: "small", disabled: !may,
-        title: may ? undefined : activate, "aria-label": `Activate calibration ${c.id}`,
-        onclick: () => { if (may) void activate(c.id); } }, "Activate") : null)));
+      c.status === "done" && !c.active ? h("button", { type: "button", class: "small", disabled: refusal !== null,
+        title: refusal ?? undefined, "aria-label": `Activate calibration ${c.id}`, onclick: () => activate(c.id) },
+      "Activate") : null)));
 }
 
 /** The progress of the calibration uploaded last (or of any, before an upload) from /ws/events. */
@@ -134,7 +133,8 @@ export function calibrationPage(ctx: PageContext): Page {
     }
   });
 
-  const activate = canEdit ? async (id: number) => {
+  const refusal = canEdit ? null : roleReason(session, "admin", "Activating a calibration");
+  const activate = async (id: number) => {
     try {
       await api.activateCalibration(id);
       msg.show(`Calibration #${id} is now the tracker's rig.`, "ok");
@@ -142,7 +142,7 @@ export function calibrationPage(ctx: PageContext): Page {
     } catch (e) {
       msg.show(`Not activated: ${errorText(e)}`, "bad");
     }
-  } : roleReason(session, "admin", "Activating a calibration");
+  };
 
   async function load(): Promise<void> {
     let list: CalibrationOut[];
@@ -152,7 +152,7 @@ export function calibrationPage(ctx: PageContext): Page {
       msg.show(`Calibrations could not be loaded: ${errorText(e)}`, "bad");
       return;
     }
-    tbody.replaceChildren(...(list.length ? list.map((c) => calibrationRow(c, activate))
+    tbody.replaceChildren(...(list.length ? list.map((c) => calibrationRow(c, refusal, (id) => void activate(id)))
       : [h("tr", null, h("td", { colSpan: 8, class: "muted" }, "No calibrations yet."))]));
   }
   void load();

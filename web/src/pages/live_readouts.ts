@@ -36,7 +36,7 @@ export class Readouts {
     this.render(tel, sync);
   }
 
-  render(tel: Telemetry, sync: string): void {
+  private render(tel: Telemetry, sync: string): void {
     const m = motionOf(this.state.buffer.before(tel, 0.6));
     const set = (key: string, text: string) => { this.dd[key].textContent = text; };
     set("frame", `${tel.frame} · ${sync}`);
