@@ -6,6 +6,8 @@ import { PRIORITIES } from "../lib/alarms";
 import { field, h } from "../lib/dom";
 
 type Notice = HTMLParagraphElement & { show(msg: string, tone?: string): void };
+/** A change of a rule's switches (PATCH body). */
+type RulePatch = { enabled?: boolean; out_of_service?: boolean };
 
 /** Per condition kind: its fields (name, label, required). */
 const KINDS: Record<string, [string, string, boolean][]> = {
@@ -27,11 +29,26 @@ export function describeCondition(c: Record<string, unknown>): string {
   return Object.entries(c).filter(([k]) => k !== "kind").map(([k, v]) => `${k} ${v}`).join(", ");
 }
 
-export function rulesPanel(msg: Notice): HTMLElement {
-  const tbody = h("tbody");
-  const table = h("table", { class: "data", "data-testid": "rule-table" }, h("caption", { class: "sr-only" }, "Alarm rules"),
-    h("thead", null, h("tr", null, ...["Rule", "Priority", "Condition", "On / off delay", "State", "Enabled", "Out of service", ""]
-      .map((c) => h("th", { scope: "col" }, c)))), tbody);
+/** A rule's row: its cells, the enabled switch (not built in) and the out-of-service switch (patch: a change of
+ * one), delete (remove; built-in rules: none). */
+function ruleRow(r: AlarmRuleOut, patch: (r: AlarmRuleOut, body: RulePatch) => void, remove: (r: AlarmRuleOut) => void
+): HTMLTableRowElement {
+  const en = h("input", { type: "checkbox", checked: r.enabled, disabled: r.built_in, "aria-label": `${r.name} enabled` });
+  const oos = h("input", { type: "checkbox", checked: r.out_of_service, "aria-label": `${r.name} out of service` });
+  en.addEventListener("change", () => patch(r, { enabled: en.checked }));
+  oos.addEventListener("change", () => patch(r, { out_of_service: oos.checked }));
+  const del = r.built_in ? h("span", { class: "muted" }, "built in")
+    : h("button", { type: "button", onclick: () => remove(r) }, "Delete");
+  return h("tr", { "data-rule": String(r.id), "data-built-in": String(r.built_in) }, h("td", null, r.name),
+    h("td", { class: `prio-${r.priority}` }, r.priority),
+    h("td", null, `${r.condition.kind}: ${describeCondition(r.condition)}`),
+    h("td", null, `${r.on_delay_s} s / ${r.off_delay_s} s`), h("td", null, (r.state ?? "—").replace(/_/g, " ")),
+    h("td", null, en), h("td", null, oos), h("td", null, del));
+}
+
+/** The form for a new rule: name, priority, the condition with its fields (following the chosen kind), delays.
+ * create: on submit, with the rule's body and a reset of the form (after it was created). */
+function ruleForm(create: (body: AlarmRuleIn, reset: () => void) => void): HTMLFormElement {
   const name = h("input", { name: "rule-name", required: true, maxLength: 128 });
   const prio = h("select", { name: "rule-priority" }, ...PRIORITIES.map((p) => h("option", { value: p }, p)));
   const kind = h("select", { name: "rule-kind" }, ...Object.keys(KINDS).map((k) => h("option", { value: k }, k)));
@@ -54,7 +71,33 @@ export function rulesPanel(msg: Notice): HTMLElement {
   kind.addEventListener("change", showFields);
   showFields();
 
+  form.addEventListener("submit", (ev) => {
+    ev.preventDefault();
+    const [k, shape] = kind.value.split(" ");
+    const condition: Record<string, unknown> = { kind: k };
+    if (shape) condition.shape = shape;
+    for (const [key, el] of inputs) if (el.value !== "") condition[key] = Number(el.value);
+    const body = { name: name.value.trim(), priority: prio.value as Priority, condition,
+      on_delay_s: Number(onDelay.value), off_delay_s: Number(offDelay.value) } as unknown as AlarmRuleIn;
+    create(body, () => {
+      form.reset();
+      showFields();
+    });
+  });
+  return form;
+}
+
+export function rulesPanel(msg: Notice): HTMLElement {
+  const tbody = h("tbody");
+  const table = h("table", { class: "data", "data-testid": "rule-table" }, h("caption", { class: "sr-only" }, "Alarm rules"),
+    h("thead", null, h("tr", null, ...["Rule", "Priority", "Condition", "On / off delay", "State", "Enabled", "Out of service", ""]
+      .map((c) => h("th", { scope: "col" }, c)))), tbody);
   const fail = (what: string, e: unknown) => msg.show(`${what}: ${errorText(e)}`, "bad");
+  const form = ruleForm((body, reset) => void api.createAlarmRule(body).then(() => {
+    msg.show(`Rule ${body.name} created.`, "ok");
+    reset();
+    return load();
+  }, (e) => fail("The rule was not created", e)));
 
   async function load(): Promise<void> {
     let rules: AlarmRuleOut[];
@@ -64,22 +107,10 @@ export function rulesPanel(msg: Notice): HTMLElement {
       fail("Rules could not be loaded", e);
       return;
     }
-    tbody.replaceChildren(...rules.map((r) => {
-      const en = h("input", { type: "checkbox", checked: r.enabled, disabled: r.built_in, "aria-label": `${r.name} enabled` });
-      const oos = h("input", { type: "checkbox", checked: r.out_of_service, "aria-label": `${r.name} out of service` });
-      en.addEventListener("change", () => void patch(r, { enabled: en.checked }));
-      oos.addEventListener("change", () => void patch(r, { out_of_service: oos.checked }));
-      const del = r.built_in ? h("span", { class: "muted" }, "built in")
-        : h("button", { type: "button", onclick: () => void remove(r) }, "Delete");
-      return h("tr", { "data-rule": String(r.id), "data-built-in": String(r.built_in) }, h("td", null, r.name),
-        h("td", { class: `prio-${r.priority}` }, r.priority),
-        h("td", null, `${r.condition.kind}: ${describeCondition(r.condition)}`),
-        h("td", null, `${r.on_delay_s} s / ${r.off_delay_s} s`), h("td", null, (r.state ?? "—").replace(/_/g, " ")),
-        h("td", null, en), h("td", null, oos), h("td", null, del));
-    }));
+    tbody.replaceChildren(...rules.map((r) => ruleRow(r, (x, body) => void patch(x, body), (x) => void remove(x))));
   }
 
-  async function patch(r: AlarmRuleOut, body: { enabled?: boolean; out_of_service?: boolean }): Promise<void> {
+  async function patch(r: AlarmRuleOut, body: RulePatch): Promise<void> {
     try {
       await api.patchAlarmRule(r.id, body);
       msg.show(`Rule ${r.name} changed.`, "ok");
@@ -100,21 +131,6 @@ export function rulesPanel(msg: Notice): HTMLElement {
     await load();
   }
 
-  form.addEventListener("submit", (ev) => {
-    ev.preventDefault();
-    const [k, shape] = kind.value.split(" ");
-    const condition: Record<string, unknown> = { kind: k };
-    if (shape) condition.shape = shape;
-    for (const [key, el] of inputs) if (el.value !== "") condition[key] = Number(el.value);
-    const body = { name: name.value.trim(), priority: prio.value as Priority, condition,
-      on_delay_s: Number(onDelay.value), off_delay_s: Number(offDelay.value) } as unknown as AlarmRuleIn;
-    void api.createAlarmRule(body).then(() => {
-      msg.show(`Rule ${body.name} created.`, "ok");
-      form.reset();
-      showFields();
-      return load();
-    }, (e) => fail("The rule was not created", e));
-  });
   void load();
   return h("section", { class: "panel", "aria-labelledby": "rules-title" }, h("h2", { id: "rules-title" }, "Rules"),
     h("div", { class: "table-wrap" }, table), h("h3", null, "New rule"), form);

@@ -96,6 +96,32 @@ function alarmRow(a0: AlarmOut, canAct: boolean, run: Run, fail: Fail): Row {
   return { tr, update };
 }
 
+/** The alarm table's rows in tbody, sorted by priority then time, each alarm's row kept and updated in place;
+ * clear: forget them all (another view). */
+function alarmRows(tbody: HTMLTableSectionElement, canAct: boolean, run: Run, fail: Fail
+): { render(list: AlarmOut[]): void; clear(): void } {
+  const rows = new Map<number, Row>();
+  function render(list: AlarmOut[]): void {
+    const sorted = [...list].sort(byPriorityThenTime);
+    const keep = new Set(sorted.map((a) => a.id));
+    for (const id of [...rows.keys()]) if (!keep.has(id)) rows.delete(id);
+    const ordered = sorted.map((a) => {
+      let r = rows.get(a.id);
+      if (r) r.update(a);
+      else rows.set(a.id, (r = alarmRow(a, canAct, run, fail)));
+      return r.tr;
+    });
+    const same = ordered.length === tbody.children.length && ordered.every((tr, i) => tbody.children[i] === tr);
+    if (!same) tbody.replaceChildren(...ordered);
+    if (!sorted.length) tbody.replaceChildren(h("tr", null, h("td", { colSpan: 8, class: "muted" }, "No alarms.")));
+  }
+  function clear(): void {
+    rows.clear();
+    tbody.replaceChildren();
+  }
+  return { render, clear };
+}
+
 export function alarmsPage(ctx: PageContext): Page {
   const { root, session } = ctx;
   const canAct = atLeast(session, "operator");
@@ -112,7 +138,6 @@ export function alarmsPage(ctx: PageContext): Page {
     !canAct ? h("p", { class: "muted" }, roleReason(session, "operator", "Acknowledging and shelving")) : null,
     atLeast(session, "admin") ? rulesPanel(msg) : null));
 
-  const rows = new Map<number, Row>();
   const fail = (what: string, e: unknown) => msg.show(`${what}: ${errorText(e)}`, "bad");
 
   async function run(what: string, fn: () => Promise<unknown>): Promise<void> {
@@ -124,20 +149,7 @@ export function alarmsPage(ctx: PageContext): Page {
     }
   }
 
-  function render(list: AlarmOut[]): void {
-    const sorted = [...list].sort(byPriorityThenTime);
-    const keep = new Set(sorted.map((a) => a.id));
-    for (const id of [...rows.keys()]) if (!keep.has(id)) rows.delete(id);
-    const ordered = sorted.map((a) => {
-      let r = rows.get(a.id);
-      if (r) r.update(a);
-      else rows.set(a.id, (r = alarmRow(a, canAct, run, fail)));
-      return r.tr;
-    });
-    const same = ordered.length === tbody.children.length && ordered.every((tr, i) => tbody.children[i] === tr);
-    if (!same) tbody.replaceChildren(...ordered);
-    if (!sorted.length) tbody.replaceChildren(h("tr", null, h("td", { colSpan: 8, class: "muted" }, "No alarms.")));
-  }
+  const { render, clear } = alarmRows(tbody, canAct, run, fail);
 
   async function loadDay(): Promise<void> {
     try {
@@ -152,8 +164,7 @@ export function alarmsPage(ctx: PageContext): Page {
     else void loadDay();
   });
   view.addEventListener("change", () => {
-    rows.clear();
-    tbody.replaceChildren();
+    clear();
     if (view.value === "open") render([...alarmCenter.alarms.values()]);
     else void loadDay();
   });

@@ -8,6 +8,8 @@ import { atLeast, roleReason } from "../lib/session";
 import { ReconnectingSocket } from "../lib/socket";
 import type { Page, PageContext } from "./types";
 
+type Notice = ReturnType<typeof notice>;
+
 /** A record's result in a few words: its RMS reprojection error, or why it failed. */
 function summary(c: CalibrationOut): string {
   if (c.status === "failed") return c.error ?? "failed";
@@ -73,10 +75,9 @@ function calibrationProgress(): { progress: HTMLProgressElement; text: HTMLEleme
   };
 }
 
-export function calibrationPage(ctx: PageContext): Page {
-  const { root, session, status } = ctx;
-  const canEdit = atLeast(session, "admin");
-  const msg = notice("status");
+/** The upload form: left and right images, the board and its square size (admin; disabled otherwise). On
+ * submit it checks the pairs, uploads them, says so in msg; uploaded: with the new record's id. */
+function uploadForm(canEdit: boolean, msg: Notice, uploaded: (id: number) => void): HTMLFormElement {
   const left = h("input", { type: "file", name: "left", multiple: true, accept: "image/*", required: true });
   const right = h("input", { type: "file", name: "right", multiple: true, accept: "image/*", required: true });
   const board = h("input", { name: "board", value: "9x6", required: true, pattern: "\\d+x\\d+", size: 6 });
@@ -88,24 +89,6 @@ export function calibrationPage(ctx: PageContext): Page {
       h("legend", { class: "sr-only" }, "New calibration"),
       field("Left images", left, "in the same order as the right ones"), field("Right images", right),
       field("Board (inner corners)", board, "COLSxROWS, e.g. 9x6"), field("Square size (m)", square), submit));
-  const watch = calibrationProgress();
-  const tbody = h("tbody");
-  const table = h("table", { class: "data" }, h("caption", { class: "sr-only" }, "Calibrations, newest first"),
-    h("thead", null, h("tr", null, ...["#", "Created", "Status", "Board", "Pairs", "Result", "Active", ""].map((c) =>
-      h("th", { scope: "col" }, c)))), tbody);
-  root.replaceChildren(h("section", { class: "page" }, h("h1", null, "Calibration"),
-    h("section", { class: "panel", "aria-labelledby": "upload-title" }, h("h2", { id: "upload-title" }, "New calibration"),
-      canEdit ? h("p", { class: "muted" }, "Upload pairs of chessboard photos taken by the left and right cameras at the same moments.")
-        : h("p", { class: "reason", role: "note", "data-testid": "cal-reason" }, roleReason(session, "admin", "Calibrating")),
-      form, watch.progress, watch.text),
-    msg, h("div", { class: "table-wrap" }, table)));
-
-  const onEvent = (ev: ServerEvent) => {
-    if (watch.onEvent(ev)) void load();
-  };
-  const socket = new ReconnectingSocket<ServerEvent>({ path: "/ws/events", onMessage: onEvent,
-    onState: (s) => status.slot("events", s === "open" ? "Events: connected" : "Events: reconnecting…", s === "open" ? "ok" : "warn") });
-
   form.addEventListener("submit", async (ev) => {
     ev.preventDefault();
     if (!canEdit) return;
@@ -123,15 +106,42 @@ export function calibrationPage(ctx: PageContext): Page {
     msg.show(`Uploading ${lf.length} pairs…`, "info");
     try {
       const rec = await api.uploadCalibration(fd);
-      watch.started(rec.id);
-      msg.show(`Uploaded: calibration #${rec.id} is running.`, "ok");
-      void load();
+      uploaded(rec.id);
     } catch (e) {
       msg.show(`Upload refused: ${errorText(e)}`, "bad");
     } finally {
       submit.disabled = false;
     }
   });
+  return form;
+}
+
+export function calibrationPage(ctx: PageContext): Page {
+  const { root, session, status } = ctx;
+  const canEdit = atLeast(session, "admin");
+  const msg = notice("status");
+  const watch = calibrationProgress();
+  const form = uploadForm(canEdit, msg, (id) => {
+    watch.started(id);
+    msg.show(`Uploaded: calibration #${id} is running.`, "ok");
+    void load();
+  });
+  const tbody = h("tbody");
+  const table = h("table", { class: "data" }, h("caption", { class: "sr-only" }, "Calibrations, newest first"),
+    h("thead", null, h("tr", null, ...["#", "Created", "Status", "Board", "Pairs", "Result", "Active", ""].map((c) =>
+      h("th", { scope: "col" }, c)))), tbody);
+  root.replaceChildren(h("section", { class: "page" }, h("h1", null, "Calibration"),
+    h("section", { class: "panel", "aria-labelledby": "upload-title" }, h("h2", { id: "upload-title" }, "New calibration"),
+      canEdit ? h("p", { class: "muted" }, "Upload pairs of chessboard photos taken by the left and right cameras at the same moments.")
+        : h("p", { class: "reason", role: "note", "data-testid": "cal-reason" }, roleReason(session, "admin", "Calibrating")),
+      form, watch.progress, watch.text),
+    msg, h("div", { class: "table-wrap" }, table)));
+
+  const onEvent = (ev: ServerEvent) => {
+    if (watch.onEvent(ev)) void load();
+  };
+  const socket = new ReconnectingSocket<ServerEvent>({ path: "/ws/events", onMessage: onEvent,
+    onState: (s) => status.slot("events", s === "open" ? "Events: connected" : "Events: reconnecting…", s === "open" ? "ok" : "warn") });
 
   const refusal = canEdit ? null : roleReason(session, "admin", "Activating a calibration");
   const activate = async (id: number) => {

@@ -7,12 +7,67 @@ import { api } from "../api/client";
 import type { Status, Telemetry } from "../api/types";
 import { h } from "../lib/dom";
 import { ReconnectingSocket, type SocketState } from "../lib/socket";
+import type { StatusBar } from "../lib/statusbar";
 import { MountControls } from "./live_controls";
 import { TrackPlots } from "./live_plots";
 import { Readouts } from "./live_readouts";
-import { liveState } from "./live_state";
+import { type Debug, liveState, type LiveState } from "./live_state";
 import { LiveVideo } from "./live_video";
 import type { Page, PageContext } from "./types";
+
+/** The aim's dead band from the tracker's settings (the default kept when they cannot be read). */
+async function loadDeadband(state: LiveState): Promise<void> {
+  try {
+    state.deadbandFrac = (await api.trackerConfig()).aim.deadband_frac ?? state.deadbandFrac;
+  } catch {
+    /* keep the default */
+  }
+}
+
+/** The telemetry socket, its state shown in the status bar; reconnected: the server came back (opened again). */
+function telemetrySocket(status: StatusBar, debug: Debug, onMessage: (msg: Telemetry) => void, reconnected: () => void
+): ReconnectingSocket<Telemetry> {
+  // onState runs in the constructor already ("connecting"), before `socket` is assigned
+  let socket: ReconnectingSocket<Telemetry> | null = null;
+  socket = new ReconnectingSocket<Telemetry>({ path: "/ws/telemetry", onMessage,
+    onState: (s: SocketState, info: { attempts: number }) => {
+      const opens = socket?.opens ?? 0;
+      debug.socketOpens = opens;
+      const text = s === "open" ? "Telemetry: connected" : s === "connecting" ? "Telemetry: connecting…" :
+        s === "unauthorized" ? "Telemetry: not logged in" : `Telemetry: disconnected, reconnecting (${info.attempts})`;
+      status.slot("telemetry", text, s === "open" ? "ok" : s === "connecting" ? "info" : "bad");
+      if (s === "open" && opens > 1) reconnected();
+    } });
+  return socket;
+}
+
+/** Take in a status: the source's size and field of view, and the mount's state (all of it when the
+ * telemetry, last at telemetryAt (performance.now()), has not flowed for 2 s; else its limits). */
+function applyStatus(s: Status, state: LiveState, video: LiveVideo, controls: MountControls, telemetryAt: number): void {
+  const w = Number(s.source?.width), hh = Number(s.source?.height);
+  if (w > 0 && hh > 0 && (w !== state.srcW || hh !== state.srcH)) {
+    state.srcW = w;
+    state.srcH = hh;
+    state.debug.size = [w, hh];
+    video.sizeChanged();
+  }
+  const fh = Number(s.source?.hfov_deg), fv = Number(s.source?.vfov_deg);
+  state.fovDeg = fh > 0 && fv > 0 ? [fh, fv] : null;
+  // the telemetry carries the servo state of every frame; the status fills in when it does not flow
+  if (performance.now() - telemetryAt > 2000) controls.updateServo(s.servo);
+  else if (s.servo.limits) controls.updateServo({ limits: s.servo.limits } as typeof s.servo);
+}
+
+/** Run each clean-up in turn, going on when one throws. */
+function disposeAll(fns: (() => void)[]): void {
+  for (const fn of fns) {
+    try {
+      fn();
+    } catch {
+      /* keep going */
+    }
+  }
+}
 
 export function livePage(ctx: PageContext): Page {
   const { session, root, status } = ctx;
@@ -43,62 +98,26 @@ export function livePage(ctx: PageContext): Page {
       readouts?.maybeRender(msg, video.source === "mjpeg" ? "latest (MJPEG has no frame timestamps)" : "latest");
     }
   };
-  const loadConfig = async () => {
-    try {
-      state.deadbandFrac = (await api.trackerConfig()).aim.deadband_frac ?? state.deadbandFrac;
-    } catch {
-      /* keep the default */
-    }
-  };
-  // onState runs in the constructor already ("connecting"), before `socket` is assigned
-  let socket: ReconnectingSocket<Telemetry> | null = null;
-  socket = new ReconnectingSocket<Telemetry>({ path: "/ws/telemetry", onMessage: onTelemetry,
-    onState: (s: SocketState, info: { attempts: number }) => {
-      const opens = socket?.opens ?? 0;
-      debug.socketOpens = opens;
-      const text = s === "open" ? "Telemetry: connected" : s === "connecting" ? "Telemetry: connecting…" :
-        s === "unauthorized" ? "Telemetry: not logged in" : `Telemetry: disconnected, reconnecting (${info.attempts})`;
-      status.slot("telemetry", text, s === "open" ? "ok" : s === "connecting" ? "info" : "bad");
-      if (s === "open" && opens > 1) { // the server came back: video, presets and settings again
-        buffer.clear();
-        void video.restart("reconnected");
-        void controls.loadPresets();
-        void loadConfig();
-      }
-    } });
-
-  const onStatus = (s: Status | null, online: boolean) => {
-    if (!s || !online) return;
-    const w = Number(s.source?.width), hh = Number(s.source?.height);
-    if (w > 0 && hh > 0 && (w !== state.srcW || hh !== state.srcH)) {
-      state.srcW = w;
-      state.srcH = hh;
-      debug.size = [w, hh];
-      video.sizeChanged();
-    }
-    const fh = Number(s.source?.hfov_deg), fv = Number(s.source?.vfov_deg);
-    state.fovDeg = fh > 0 && fv > 0 ? [fh, fv] : null;
-    // the telemetry carries the servo state of every frame; the status fills in when it does not flow
-    if (performance.now() - telemetryAt > 2000) controls.updateServo(s.servo);
-    else if (s.servo.limits) controls.updateServo({ limits: s.servo.limits } as typeof s.servo);
-  };
-  const unsubscribe = status.subscribe(onStatus);
+  // the server came back: video, presets and settings again
+  const socket = telemetrySocket(status, debug, onTelemetry, () => {
+    buffer.clear();
+    void video.restart("reconnected");
+    void controls.loadPresets();
+    void loadDeadband(state);
+  });
+  const unsubscribe = status.subscribe((s: Status | null, online: boolean) => {
+    if (s && online) applyStatus(s, state, video, controls, telemetryAt);
+  });
 
   void controls.loadPresets();
-  void loadConfig();
+  void loadDeadband(state);
   void video.restart("start");
 
   return {
     unmount() {
       state.disposed = true;
-      for (const fn of [unsubscribe, () => video.dispose(), () => socket?.close(), () => plots.dispose(),
-        () => controls.dispose()]) {
-        try {
-          fn();
-        } catch {
-          /* keep going */
-        }
-      }
+      disposeAll([unsubscribe, () => video.dispose(), () => socket.close(), () => plots.dispose(),
+        () => controls.dispose()]);
       status.slot("telemetry", null);
       status.slot("video", null);
     },

@@ -24,6 +24,23 @@ export interface EvidencePanel {
   show(bookmarks: Bookmark[], locks: Lock[]): void;
 }
 
+/** Export the range t0..t1 (both cameras), its progress and then its download link (or why not) in out. */
+async function exportRange([t0, t1]: [number, number], out: HTMLElement): Promise<void> {
+  try {
+    let job = await rec.exportRange(t0, t1);
+    while (job.status === "queued" || job.status === "running") {
+      out.textContent = `Export ${job.id}: ${job.status} ${Math.round(job.progress * 100)} %`;
+      await new Promise((r) => setTimeout(r, 500));
+      job = await rec.exportJob(job.id);
+    }
+    out.replaceChildren(job.status === "done"
+      ? h("a", { href: rec.exportUrl(job.id), download: "", "data-testid": "export-link" }, `Download export ${job.id}`)
+      : `Export ${job.id} failed: ${job.error ?? "unknown error"}`);
+  } catch (e) {
+    out.textContent = `Export failed: ${errorText(e)}`;
+  }
+}
+
 export function evidencePanel(operator: boolean, admin: boolean, hooks: EvidenceHooks): EvidencePanel {
   const note = h("input", { type: "text", name: "note", maxLength: 2000, disabled: !operator });
   const bmBtn = h("button", { type: "button", disabled: !operator }, "Bookmark this frame");
@@ -73,25 +90,8 @@ export function evidencePanel(operator: boolean, admin: boolean, hooks: Evidence
     }
   }
 
-  async function exportRange(): Promise<void> {
-    const [t0, t1] = hooks.range();
-    try {
-      let job = await rec.exportRange(t0, t1);
-      while (job.status === "queued" || job.status === "running") {
-        exportOut.textContent = `Export ${job.id}: ${job.status} ${Math.round(job.progress * 100)} %`;
-        await new Promise((r) => setTimeout(r, 500));
-        job = await rec.exportJob(job.id);
-      }
-      exportOut.replaceChildren(job.status === "done"
-        ? h("a", { href: rec.exportUrl(job.id), download: "", "data-testid": "export-link" }, `Download export ${job.id}`)
-        : `Export ${job.id} failed: ${job.error ?? "unknown error"}`);
-    } catch (e) {
-      exportOut.textContent = `Export failed: ${errorText(e)}`;
-    }
-  }
-
   bmBtn.addEventListener("click", () => void evidence("bookmark"));
   lockBtn.addEventListener("click", () => void evidence("lock"));
-  exportBtn.addEventListener("click", () => void exportRange());
+  exportBtn.addEventListener("click", () => void exportRange(hooks.range(), exportOut));
   return { el, show };
 }

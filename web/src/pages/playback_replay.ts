@@ -17,6 +17,33 @@ export interface ReplayPanel {
   load(t0: number, t1: number): Promise<void>;
 }
 
+/** A replay in a few words: its threshold and rig, and its agreement with the live result. */
+function describe(r: Replay): string {
+  const a = r.agreement;
+  const agree = a && a.frames ? `, same detection in ${num(100 * Number(a.same_detected), 1)} % of ${a.frames} frames`
+    + (a.range_diff_median_m != null ? `, |Δr| median ${num(Number(a.range_diff_median_m), 3)} m` : "") : "";
+  return `Replay ${r.id} (ε ${String(r.settings.threshold)}, ${String(r.settings.rig)})${agree}`;
+}
+
+/** The tracks of replay id within t0..t1 (at most MAX_TRACKS; those that cannot be loaded left out). */
+async function replayTracks(id: number, t0: number, t1: number): Promise<TrackDetail[]> {
+  const list = await request<{ id: number }[]>("GET", "/api/tracks",
+    { query: { start: t0, end: t1, replay: id, limit: MAX_TRACKS } });
+  const tracks = await Promise.all(list.map((t) => api.track(t.id).catch(() => null)));
+  return tracks.filter((t): t is TrackDetail => t !== null);
+}
+
+/** Start a replay (body: its range and threshold) and wait until it ends, its progress shown in out. */
+async function runReplay(body: Record<string, number>, out: HTMLElement): Promise<Replay> {
+  let job = await request<Replay>("POST", "/api/replays", { body });
+  while (job.status === "queued" || job.status === "running") {
+    out.textContent = `Replay ${job.id}: ${job.status} ${Math.round(job.progress * 100)} %`;
+    await new Promise((r) => setTimeout(r, 700));
+    job = await request<Replay>("GET", `/api/replays/${job.id}`);
+  }
+  return job;
+}
+
 export function replayPanel(operator: boolean, draw: (tracks: TrackDetail[]) => void): ReplayPanel {
   const select = h("select", { name: "replay", "aria-label": "Replay shown" }, h("option", { value: "" }, "none"));
   const threshold = h("input", { type: "number", name: "threshold", min: 1, max: 254, placeholder: "live",
@@ -28,21 +55,11 @@ export function replayPanel(operator: boolean, draw: (tracks: TrackDetail[]) => 
   let t0 = 0, t1 = 0;
   let replays: Replay[] = [];
 
-  function describe(r: Replay): string {
-    const a = r.agreement;
-    const agree = a && a.frames ? `, same detection in ${num(100 * Number(a.same_detected), 1)} % of ${a.frames} frames`
-      + (a.range_diff_median_m != null ? `, |Δr| median ${num(Number(a.range_diff_median_m), 3)} m` : "") : "";
-    return `Replay ${r.id} (ε ${String(r.settings.threshold)}, ${String(r.settings.rig)})${agree}`;
-  }
-
   async function show(): Promise<void> {
     const r = replays.find((x) => String(x.id) === select.value);
     out.textContent = r ? describe(r) : "";
     if (!r) return draw([]);
-    const list = await request<{ id: number }[]>("GET", "/api/tracks",
-      { query: { start: t0, end: t1, replay: r.id, limit: MAX_TRACKS } });
-    const tracks = await Promise.all(list.map((t) => api.track(t.id).catch(() => null)));
-    draw(tracks.filter((t): t is TrackDetail => t !== null));
+    draw(await replayTracks(r.id, t0, t1));
   }
 
   async function load(a: number, b: number): Promise<void> {
@@ -64,12 +81,7 @@ export function replayPanel(operator: boolean, draw: (tracks: TrackDetail[]) => 
     const body: Record<string, number> = { start: t0, end: t1 };
     if (threshold.value) body.threshold = Number(threshold.value);
     try {
-      let job = await request<Replay>("POST", "/api/replays", { body });
-      while (job.status === "queued" || job.status === "running") {
-        out.textContent = `Replay ${job.id}: ${job.status} ${Math.round(job.progress * 100)} %`;
-        await new Promise((r) => setTimeout(r, 700));
-        job = await request<Replay>("GET", `/api/replays/${job.id}`);
-      }
+      const job = await runReplay(body, out);
       if (job.status === "failed") {
         out.textContent = `Replay ${job.id} failed: ${job.error ?? ""}`;
         return;

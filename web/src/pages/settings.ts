@@ -5,7 +5,7 @@ import openapi from "../../openapi.json";
 import { api, ApiError, errorText } from "../api/client";
 import type { TrackerSettings } from "../api/types";
 import { h, notice, uid } from "../lib/dom";
-import { atLeast, roleReason } from "../lib/session";
+import { atLeast, roleReason, type Session } from "../lib/session";
 import type { Page, PageContext } from "./types";
 
 interface Prop {
@@ -56,14 +56,17 @@ function changes(inputs: Iterable<{ section: Section; name: string; input: HTMLI
   return patch;
 }
 
-export function settingsPage(ctx: PageContext): Page {
-  const { root, session } = ctx;
-  const canEdit = atLeast(session, "admin");
-  const msg = notice("status");
-  const inputs = new Map<string, { section: Section; name: string; input: HTMLInputElement; prop: Prop }>();
-  let current: TrackerSettings | null = null;
+/** A setting's input with its place (section, name) and schema. */
+interface SettingInput {
+  section: Section;
+  name: string;
+  input: HTMLInputElement;
+  prop: Prop;
+}
 
-  const fieldsets = SECTIONS.map(({ key, schema, title }) => {
+/** A fieldset per section with its settings' fields; each input put in inputs under "section.name". */
+function settingFieldsets(canEdit: boolean, inputs: Map<string, SettingInput>): HTMLFieldSetElement[] {
+  return SECTIONS.map(({ key, schema, title }) => {
     const props = schemas[schema]?.properties ?? {};
     const rows = Object.entries(props).map(([name, prop]) => {
       const { row, input } = settingField(key, name, prop, canEdit);
@@ -72,31 +75,67 @@ export function settingsPage(ctx: PageContext): Page {
     });
     return h("fieldset", { class: "panel settings-group" }, h("legend", null, title), ...rows);
   });
+}
+
+/** Show the settings in their inputs, none marked as changed. */
+function fillInputs(inputs: Iterable<SettingInput>, current: TrackerSettings): void {
+  for (const { section, name, input } of inputs) {
+    const v = (current[section] as Record<string, unknown>)[name];
+    input.value = v === undefined || v === null ? "" : String(v);
+    input.classList.remove("changed");
+  }
+}
+
+/** Mark an input as changed while its value differs from the current setting (current(): null until loaded). */
+function markChanges(inputs: Iterable<SettingInput>, current: () => TrackerSettings | null): void {
+  for (const { section, name, input } of inputs) {
+    input.addEventListener("input", () => {
+      const cur = current();
+      const v = cur ? (cur[section] as Record<string, unknown>)[name] : undefined;
+      input.classList.toggle("changed", String(v) !== input.value);
+    });
+  }
+}
+
+/** PATCH the changed settings and say how many were saved, or why not; saved: with the settings now in force. */
+async function saveChanges(patch: Record<string, Record<string, number>>, msg: ReturnType<typeof notice>,
+  saved: (s: TrackerSettings) => void): Promise<void> {
+  try {
+    saved(await api.patchTrackerConfig(patch));
+    const n = Object.values(patch).reduce((a, s) => a + Object.keys(s).length, 0);
+    msg.show(`Saved ${n} setting${n === 1 ? "" : "s"}: applied from the next frame.`, "ok");
+  } catch (e) {
+    msg.show(e instanceof ApiError && e.status === 403 ? `Refused: ${e.detail}` :
+      `Not saved: ${errorText(e)}`, "bad");
+  }
+}
+
+/** The line above the form: when changes apply (admin), or why this session may only read them. */
+function settingsIntro(session: Session, canEdit: boolean): HTMLParagraphElement {
+  return canEdit ? h("p", { class: "muted" }, "Changes apply from the next frame and are kept across restarts.")
+    : h("p", { class: "reason", id: "settings-reason", role: "note", "data-testid": "settings-reason" },
+      `${roleReason(session, "admin", "Changing the tracker settings")} You can read them.`);
+}
+
+export function settingsPage(ctx: PageContext): Page {
+  const { root, session } = ctx;
+  const canEdit = atLeast(session, "admin");
+  const msg = notice("status");
+  const inputs = new Map<string, SettingInput>();
+  let current: TrackerSettings | null = null;
+  const fill = () => {
+    if (current) fillInputs(inputs.values(), current);
+  };
+
+  const fieldsets = settingFieldsets(canEdit, inputs);
   const save = h("button", { type: "submit", class: "primary", disabled: !canEdit }, "Save changes");
   const reset = h("button", { type: "button", disabled: !canEdit, onclick: () => fill() }, "Undo edits");
   const form = h("form", { class: "settings-form", "aria-describedby": canEdit ? undefined : "settings-reason" },
     ...fieldsets, h("div", { class: "actions" }, save, reset));
   root.replaceChildren(h("section", { class: "page" }, h("h1", null, "Tracker settings"),
-    canEdit ? h("p", { class: "muted" }, "Changes apply from the next frame and are kept across restarts.")
-      : h("p", { class: "reason", id: "settings-reason", role: "note", "data-testid": "settings-reason" },
-          `${roleReason(session, "admin", "Changing the tracker settings")} You can read them.`),
-    msg, form));
+    settingsIntro(session, canEdit), msg, form));
 
-  function fill(): void {
-    if (!current) return;
-    for (const { section, name, input } of inputs.values()) {
-      const v = (current[section] as Record<string, unknown>)[name];
-      input.value = v === undefined || v === null ? "" : String(v);
-      input.classList.remove("changed");
-    }
-  }
-
-  for (const { section, name, input } of inputs.values()) {
-    input.addEventListener("input", () => {
-      const v = current ? (current[section] as Record<string, unknown>)[name] : undefined;
-      input.classList.toggle("changed", String(v) !== input.value);
-    });
-  }
+  markChanges(inputs.values(), () => current);
 
   async function load(): Promise<void> {
     try {
@@ -124,13 +163,10 @@ export function settingsPage(ctx: PageContext): Page {
     }
     save.disabled = true;
     try {
-      current = await api.patchTrackerConfig(patch);
-      fill();
-      const n = Object.values(patch).reduce((a, s) => a + Object.keys(s).length, 0);
-      msg.show(`Saved ${n} setting${n === 1 ? "" : "s"}: applied from the next frame.`, "ok");
-    } catch (e) {
-      msg.show(e instanceof ApiError && e.status === 403 ? `Refused: ${e.detail}` :
-        `Not saved: ${errorText(e)}`, "bad");
+      await saveChanges(patch, msg, (s) => {
+        current = s;
+        fill();
+      });
     } finally {
       save.disabled = false;
     }

@@ -59,8 +59,9 @@ function trackDetail(): { el: HTMLElement; show(id: number, rows: HTMLElement): 
   return { el, show, destroy: () => { plan.destroy(); tv.destroy(); } };
 }
 
-export function tracksPage(ctx: PageContext): Page {
-  const { root } = ctx;
+/** The time range form: a preset (the last 10 minutes to the last week) or custom from / to; syncRange: the
+ * from / to fields follow the preset (enabled for a custom range only). */
+function rangeForm(): { form: HTMLFormElement; start: HTMLInputElement; end: HTMLInputElement; syncRange(): void } {
   const now = Date.now() / 1000;
   const start = h("input", { type: "datetime-local", name: "start", value: toLocalInput(now - 3600) });
   const end = h("input", { type: "datetime-local", name: "end" });
@@ -69,19 +70,8 @@ export function tracksPage(ctx: PageContext): Page {
     h("option", { value: "86400" }, "Last day"), h("option", { value: "604800" }, "Last week"),
     h("option", { value: "custom" }, "Custom (from, to)"));
   range.value = "3600";
-  const msg = notice("status");
   const form = h("form", { class: "row-form" }, field("Time range", range), field("From", start), field("To", end,
     "empty: now"), h("button", { type: "submit", class: "primary" }, "Show tracks"));
-  const tbody = h("tbody");
-  const table = h("table", { class: "data" },
-    h("caption", { class: "sr-only" }, "Tracks, newest first"),
-    h("thead", null, h("tr", null, ...["Track", "First seen", "Duration", "Detections", "Peak speed", "Size (w × h)",
-      "Closest", ""].map((c) => h("th", { scope: "col" }, c)))), tbody);
-  const detail = trackDetail();
-  root.replaceChildren(h("section", { class: "page wide" }, h("h1", null, "Tracks"), form, msg,
-    h("div", { class: "tracks-layout" }, h("div", { class: "table-wrap scroll", tabindex: 0,
-      "aria-label": "Tracks, newest first" }, table), detail.el)));
-
   const syncRange = () => {
     const custom = range.value === "custom";
     start.disabled = !custom;
@@ -92,6 +82,23 @@ export function tracksPage(ctx: PageContext): Page {
     }
   };
   range.addEventListener("change", syncRange);
+  return { form, start, end, syncRange };
+}
+
+export function tracksPage(ctx: PageContext): Page {
+  const { root } = ctx;
+  const { form, start, end, syncRange } = rangeForm();
+  const msg = notice("status");
+  const tbody = h("tbody");
+  const table = h("table", { class: "data" },
+    h("caption", { class: "sr-only" }, "Tracks, newest first"),
+    h("thead", null, h("tr", null, ...["Track", "First seen", "Duration", "Detections", "Peak speed", "Size (w × h)",
+      "Closest", ""].map((c) => h("th", { scope: "col" }, c)))), tbody);
+  const detail = trackDetail();
+  root.replaceChildren(h("section", { class: "page wide" }, h("h1", null, "Tracks"), form, msg,
+    h("div", { class: "tracks-layout" }, h("div", { class: "table-wrap scroll", tabindex: 0,
+      "aria-label": "Tracks, newest first" }, table), detail.el)));
+
   syncRange();
 
   async function load(): Promise<void> {
