@@ -1,0 +1,65 @@
+"""The tracks' summaries (server.services.tracks.TrackBook), pure and alone: the peak speed is the speed of
+a least-squares line through a second of positions, so the noise of single positions does not make it."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from server.services.tracks import TrackBook, fitted_speed
+
+FPS = 30.0
+
+
+def _feed(book: TrackBook, positions: np.ndarray, t0: float = 1.7e9) -> None:
+    """One telemetry message a frame at FPS, one detection (track 1) at each position (x, y, z) m."""
+    for i, (x, y, z) in enumerate(positions):
+        r = math.sqrt(x * x + y * y + z * z)
+        book.add({"captured_at": t0 + i / FPS, "detections": [
+            {"track_id": 1, "x": x, "y": y, "z": z, "r": r, "theta_deg": 0.0, "phi_deg": 0.0, "size_m": [0.5, 1.7]}]})
+
+
+def _walk(speeds: list[tuple[float, float]], sigma: float, seed: int = 0) -> np.ndarray:
+    """Positions at FPS of a target 8 m ahead moving along x at each (speed m/s, for s) in turn, with
+    Gaussian noise of sigma (m) on every coordinate."""
+    v = np.concatenate([np.full(int(round(d * FPS)), s) for s, d in speeds])
+    x = np.concatenate([[0.0], np.cumsum(v[1:] / FPS)])
+    p = np.stack([x, np.full_like(x, 0.2), np.full_like(x, 8.0)], axis=1)
+    return p + np.random.default_rng(seed).normal(0.0, sigma, p.shape)
+
+
+def test_fitted_speed_of_a_straight_line_and_of_too_few_points() -> None:
+    pts = [(t, 1.0 + 3.0 * t, 2.0, 5.0 - 4.0 * t) for t in np.linspace(0.0, 1.0, 7)]
+    assert fitted_speed(pts) == pytest.approx(5.0, rel=1e-12)
+    assert fitted_speed(pts[:1]) == 0.0
+    assert fitted_speed([(1.0, 0.0, 0.0, 0.0), (1.0, 5.0, 0.0, 0.0)]) == 0.0  # no time between them
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_walker_with_noisy_positions_peaks_near_its_walking_speed(seed: int) -> None:
+    # 1.4 m/s with 0.1 m of noise a coordinate: differences of positions 2 frames apart made 5 m/s of it
+    book = TrackBook(sample_hz=10.0)
+    _feed(book, _walk([(1.4, 10.0)], sigma=0.1, seed=seed))
+    tr = book.tracks[(0, 1)]
+    assert 1.3 <= tr.peak_speed_mps <= 1.8
+    assert tr.detections == 300
+
+
+def test_a_still_target_has_no_speed_to_speak_of() -> None:
+    book = TrackBook(sample_hz=10.0)
+    _feed(book, _walk([(0.0, 10.0)], sigma=0.1))
+    assert book.tracks[(0, 1)].peak_speed_mps < 0.4
+
+
+def test_a_sprint_of_a_second_and_a_half_is_its_peak() -> None:
+    book = TrackBook(sample_hz=10.0)
+    _feed(book, _walk([(0.0, 2.0), (6.0, 1.5), (1.0, 3.0)], sigma=0.02))
+    assert book.tracks[(0, 1)].peak_speed_mps == pytest.approx(6.0, abs=0.3)
+
+
+def test_no_speed_before_half_a_second_of_positions() -> None:
+    book = TrackBook(sample_hz=10.0)
+    _feed(book, _walk([(3.0, 0.4)], sigma=0.0))
+    assert book.tracks[(0, 1)].peak_speed_mps == 0.0
