@@ -222,7 +222,8 @@ class TrackOut(BaseModel):
     first_seen: float
     last_seen: float
     detections: int
-    peak_speed_mps: float
+    peak_speed_mps: float = Field(description="the largest speed (m/s) of a least-squares line through a second "
+                                  "of the track's positions")
     width_m: float | None
     height_m: float | None
     min_range_m: float | None

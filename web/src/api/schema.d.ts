@@ -2278,7 +2278,10 @@ export interface components {
             last_seen: number;
             /** Detections */
             detections: number;
-            /** Peak Speed Mps */
+            /**
+             * Peak Speed Mps
+             * @description the largest speed (m/s) of a least-squares line through a second of the track's positions
+             */
             peak_speed_mps: number;
             /** Width M */
             width_m: number | null;
@@ -2308,7 +2311,10 @@ export interface components {
             last_seen: number;
             /** Detections */
             detections: number;
-            /** Peak Speed Mps */
+            /**
+             * Peak Speed Mps
+             * @description the largest speed (m/s) of a least-squares line through a second of the track's positions
+             */
             peak_speed_mps: number;
             /** Width M */
             width_m: number | null;
