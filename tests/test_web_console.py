@@ -273,6 +273,11 @@ def test_users_page_creates_edits_deletes_and_shows_the_audit(server: Server, pa
     page.get_by_role("status").filter(has_text="Saved walter").wait_for()
     with server.as_admin() as c:
         assert {u["username"]: u["role"] for u in c.get("/api/users").json()}["walter"] == "viewer"
+    pw = row.get_by_label("New password for walter")
+    assert pw.evaluate("el => el.form !== null")  # in the row's own form (password managers need one)
+    pw.fill("another long password")
+    pw.press("Enter")  # Enter in the row's fields saves the row
+    page.get_by_role("status").filter(has_text="Saved walter (its sessions were ended)").wait_for()
     page.get_by_role("button", name="Show audit log").click()
     page.locator("td code", has_text="user.update").first.wait_for()
     page.once("dialog", lambda d: d.accept())

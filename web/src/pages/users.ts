@@ -1,7 +1,7 @@
 // The Users page (admin): list, create, change role / password / disabled, delete; and the audit log.
 import { api, errorText } from "../api/client";
 import type { AuditOut, Role, UserOut } from "../api/types";
-import { field, h, notice } from "../lib/dom";
+import { field, h, notice, uid } from "../lib/dom";
 import { fromLocalInput, time, toLocalInput } from "../lib/format";
 import type { Page, PageContext } from "./types";
 
@@ -11,13 +11,16 @@ type Say = (text: string, tone: string) => void;
 type Fail = (what: string, e: unknown) => void;
 
 /** One user's row: role, disabled, a new password, Save (only what changed) and Delete (not oneself).
- * changed: after a save or a delete (the list and the audit log are loaded again). */
+ * changed: after a save or a delete (the list and the audit log are loaded again). The row's fields belong
+ * to a form of its own (the `form` attribute: a form cannot hold a table row's cells), so that Enter in
+ * them saves, and the password field is in a form, as password managers need. */
 function userRow(u: UserOut, self: boolean, say: Say, fail: Fail, changed: () => void): HTMLTableRowElement {
-  const r = h("select", { name: `role-${u.id}`, "aria-label": `Role of ${u.username}` },
+  const formId = uid("user-form");
+  const r = h("select", { name: `role-${u.id}`, form: formId, "aria-label": `Role of ${u.username}` },
     ...ROLES.map((x) => h("option", { value: x, selected: x === u.role }, x)));
-  const dis = h("input", { type: "checkbox", name: `disabled-${u.id}`, checked: u.disabled,
+  const dis = h("input", { type: "checkbox", name: `disabled-${u.id}`, form: formId, checked: u.disabled,
     "aria-label": `${u.username} is disabled` });
-  const pw = h("input", { type: "password", name: `password-${u.id}`, minLength: 12, maxLength: 128,
+  const pw = h("input", { type: "password", name: `password-${u.id}`, form: formId, minLength: 12, maxLength: 128,
     autocomplete: "new-password", "aria-label": `New password for ${u.username}`, placeholder: "unchanged" });
   const save = async () => {
     const patch: { role?: Role; disabled?: boolean; password?: string } = {};
@@ -46,12 +49,17 @@ function userRow(u: UserOut, self: boolean, say: Say, fail: Fail, changed: () =>
       fail(`${u.username} not deleted`, e);
     }
   };
-  const saveBtn = h("button", { type: "button", class: "small", "aria-label": `Save ${u.username}`, onclick: save }, "Save");
+  const form = h("form", { id: formId, "aria-label": `Change ${u.username}`, onsubmit: (ev: Event) => {
+    ev.preventDefault();
+    void save();
+  } }, h("input", { type: "text", name: "username", autocomplete: "username", value: u.username, hidden: true,
+    readOnly: true }));  // whose password it is, for password managers
+  const saveBtn = h("button", { type: "submit", form: formId, class: "small", "aria-label": `Save ${u.username}` }, "Save");
   const delBtn = h("button", { type: "button", class: "small danger", "aria-label": `Delete ${u.username}`,
     disabled: self, title: self ? "You cannot delete yourself" : undefined, onclick: remove }, "Delete");
   return h("tr", { "data-user": u.username }, h("th", { scope: "row" }, u.username, self ? " (you)" : ""),
     h("td", null, r), h("td", null, time(u.created_at)), h("td", null, dis), h("td", null, pw),
-    h("td", null, h("div", { class: "actions" }, saveBtn, delBtn)));
+    h("td", null, form, h("div", { class: "actions" }, saveBtn, delBtn)));
 }
 
 /** The audit log since a time, of one action or all, newest first (200 entries). */
