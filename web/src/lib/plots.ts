@@ -3,8 +3,21 @@
 import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
 
-/** title and legend above and below the canvas (px) */
+/** title and legend above and below the canvas (px) on one line each: what is left for them before a plot
+ * is drawn (canvasHeight) */
 const CHROME_PX = 52;
+
+/** The canvas height (px) that leaves room in the box for the plot's title and legend, as drawn (a legend
+ * that wraps to a second line in a narrow box takes more: the Live page's plan view at 1280 px wide). */
+function canvasHeight(box: HTMLElement, plot: uPlot | null): number {
+  let chrome = CHROME_PX;
+  if (plot) {
+    const title = plot.root.querySelector<HTMLElement>(".u-title");
+    const legend = plot.root.querySelector<HTMLElement>(".u-legend");
+    chrome = (title?.offsetHeight ?? 0) + (legend?.offsetHeight ?? 0) + 4;
+  }
+  return Math.max(120, Math.floor(box.getBoundingClientRect().height) - chrome);
+}
 
 export type XY = [(number | null)[], (number | null)[]];
 
@@ -74,7 +87,7 @@ export class MetricView {
   private size(): { width: number; height: number } {
     const r = this.el.getBoundingClientRect();
     // the box holds the title and the legend too
-    return { width: Math.max(160, Math.floor(r.width)), height: Math.max(120, Math.floor(r.height) - CHROME_PX) };
+    return { width: Math.max(160, Math.floor(r.width)), height: canvasHeight(this.el, this.plot) };
   }
 
   private create(): void {
@@ -112,6 +125,8 @@ export class MetricView {
       },
     };
     this.plot = new uPlot(opts, [null, ...this.data] as unknown as uPlot.AlignedData, this.el);
+    const legend = this.plot.root.querySelector(".u-legend");  // laid out, or wrapped anew: sized again
+    if (legend) this.ro.observe(legend);
   }
 
   private resize(): void {
@@ -249,17 +264,19 @@ export class MetricView {
 /** A plain time series (one x array shared by the series) for the Tracks page. */
 export class TimeView {
   private plot: uPlot | null = null;
+  private legend: Element | null = null;
   private ro: ResizeObserver;
   constructor(private readonly el: HTMLElement, private readonly title: string, private readonly yLabel: string,
               private readonly series: SeriesSpec[]) {
     this.ro = new ResizeObserver(() => {
       const r = this.el.getBoundingClientRect();
-      this.plot?.setSize({ width: Math.max(200, Math.floor(r.width)), height: Math.max(120, Math.floor(r.height) - CHROME_PX) });
+      this.plot?.setSize({ width: Math.max(200, Math.floor(r.width)), height: canvasHeight(this.el, this.plot) });
     });
     this.ro.observe(el);
   }
 
   setData(data: uPlot.AlignedData): void {
+    if (this.legend) this.ro.unobserve(this.legend);
     this.plot?.destroy();
     const r = this.el.getBoundingClientRect();
     this.plot = new uPlot({
@@ -273,6 +290,8 @@ export class TimeView {
       ],
       series: [{ label: "t (s)" }, ...this.series.map((s) => ({ label: s.label, stroke: s.stroke, width: s.width ?? 2 }))],
     }, data, this.el);
+    this.legend = this.plot.root.querySelector(".u-legend");  // laid out, or wrapped anew: sized again
+    if (this.legend) this.ro.observe(this.legend);
   }
 
   destroy(): void {
