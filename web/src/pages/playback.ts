@@ -42,7 +42,7 @@ class PlaybackView {
   private readonly videos = Object.fromEntries(CAMS.map((c) => [c, h("video", { muted: true, playsInline: true,
     preload: "auto", "aria-label": `${c} camera, recorded` })])) as Record<Camera, HTMLVideoElement>;
   private readonly stills = Object.fromEntries(CAMS.map((c) => [c, h("img", { alt: `${c} camera at the shown frame`,
-    "data-testid": `still-${c}` })])) as Record<Camera, HTMLImageElement>;
+    "data-testid": `still-${c}`, hidden: true })])) as Record<Camera, HTMLImageElement>;
   private readonly playBtn = h("button", { type: "button", class: "primary" }, "Play");
   private readonly rate = h("select", { name: "rate" }, ...RATES.map((r) => h("option", { value: String(r) }, `${r}x`)));
   private readonly frameOut = h("output", { "data-testid": "frame-index", "aria-live": "polite" }, "—");
