@@ -877,49 +877,56 @@ export interface components {
         /** AimSettings */
         AimSettings: {
             /**
-             * Max Rate Deg S
+             * Max rate (°/s)
+             * @description the mount's speed limit on each axis
              * @default 180
              */
             max_rate_deg_s: number;
             /**
-             * Max Accel Deg S2
+             * Max acceleration (°/s²)
+             * @description the mount's acceleration limit on each axis
              * @default 1200
              */
             max_accel_deg_s2: number;
             /**
-             * Deadband Frac
+             * Dead band (fraction of width)
              * @description deadband as a fraction of the frame width
              * @default 0.02
              */
             deadband_frac: number;
             /**
-             * Loss Timeout S
+             * Home after a loss (s)
              * @description home after the target is lost this long
              * @default 1.5
              */
             loss_timeout_s: number;
             /**
-             * Home Pan Deg
+             * Home pan (°)
+             * @description where the mount waits with no target
              * @default 0
              */
             home_pan_deg: number;
             /**
-             * Home Tilt Deg
+             * Home tilt (°)
+             * @description where the mount waits with no target
              * @default 0
              */
             home_tilt_deg: number;
             /**
-             * Centroid Gain
+             * Centroid correction gain
+             * @description weight of the image-centroid correction of the aim (0: off)
              * @default 1
              */
             centroid_gain: number;
             /**
-             * Correction Tau S
+             * Correction time constant (s)
+             * @description low-pass time constant of that correction
              * @default 0.5
              */
             correction_tau_s: number;
             /**
-             * Max Correction Deg
+             * Max correction (°)
+             * @description bound on that correction on each axis
              * @default 5
              */
             max_correction_deg: number;
@@ -1453,43 +1460,43 @@ export interface components {
         /** DetectorSettings */
         DetectorSettings: {
             /**
-             * Epsilon
-             * @description eq. (9) threshold ε (grey levels)
+             * Threshold ε (grey levels)
+             * @description eq. (9): a pixel is foreground where the two views differ by more
              * @default 12
              */
             epsilon: number;
             /**
-             * Min Area Px
-             * @description smallest object (px)
+             * Smallest object (px)
+             * @description smaller regions are not objects
              * @default 16
              */
             min_area_px: number;
             /**
-             * Absorb S
+             * Stopped object absorbed after (s)
              * @description a stopped object merges into the background after
              * @default 20
              */
             absorb_s: number;
             /**
-             * Margin Px
-             * @description box padding (px)
+             * Box margin (px)
+             * @description padding around each candidate box
              * @default 6
              */
             margin_px: number;
             /**
-             * Min Depth Gap
+             * Depth gap (fraction)
              * @description object disparity must exceed background's by
              * @default 0.04
              */
             min_depth_gap: number;
             /**
-             * Min Disparity Gap Px
+             * Depth gap, more (px)
              * @description plus this many pixels
              * @default 0.5
              */
             min_disparity_gap_px: number;
             /**
-             * Moving Min Cells
+             * Cells for a new object while moving
              * @description candidate cells needed while the mount moves
              * @default 3
              */
@@ -2377,25 +2384,25 @@ export interface components {
         /** TracksSettings */
         TracksSettings: {
             /**
-             * Gate Px
-             * @description association gate (px)
+             * Association gate (px)
+             * @description how far a detection may lie from a track's prediction to join it
              * @default 40
              */
             gate_px: number;
             /**
-             * Gate Growth Px
-             * @description gate growth per missed frame (px)
+             * Gate growth (px a frame)
+             * @description the gate widens this much for each frame a track is missed
              * @default 4
              */
             gate_growth_px: number;
             /**
-             * Confirm Hits
+             * Detections to confirm
              * @description detections before a track is confirmed
              * @default 2
              */
             confirm_hits: number;
             /**
-             * Max Missed
+             * Frames coasted
              * @description frames a track coasts before it is dropped
              * @default 60
              */
