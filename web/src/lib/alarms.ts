@@ -9,6 +9,14 @@ import { ReconnectingSocket, type SocketState } from "./socket";
 
 export const PRIORITIES: Priority[] = ["critical", "high", "medium", "low"];
 export const OPEN_STATES = new Set(["unack", "ack", "rtn_unack"]);
+const STATE_TEXT: Record<string, string> = { unack: "active, unacknowledged", ack: "active, acknowledged",
+  rtn_unack: "cleared, unacknowledged", shelved: "shelved", suppressed: "suppressed by design",
+  out_of_service: "out of service", normal: "normal" };
+
+/** An alarm state (ISA-18.2's, as the API names them) in words: "rtn_unack" is "cleared, unacknowledged". */
+export function stateText(state: string | null | undefined): string {
+  return state ? STATE_TEXT[state] ?? state.replace(/_/g, " ") : "—";
+}
 const LOUD = new Set<Priority>(["critical", "high"]);
 
 export interface AlarmTransition {

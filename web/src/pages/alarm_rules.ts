@@ -2,7 +2,7 @@
 // delete (the built-in device fault rules: out of service only), each rule's alarm state, and a form for a new rule whose fields follow the chosen condition (metres, m/s, seconds).
 import { api, errorText } from "../api/client";
 import type { AlarmRuleIn, AlarmRuleOut, Priority } from "../api/types";
-import { PRIORITIES } from "../lib/alarms";
+import { PRIORITIES, stateText } from "../lib/alarms";
 import { field, h } from "../lib/dom";
 
 type Notice = HTMLParagraphElement & { show(msg: string, tone?: string): void };
@@ -42,7 +42,7 @@ function ruleRow(r: AlarmRuleOut, patch: (r: AlarmRuleOut, body: RulePatch) => v
   return h("tr", { "data-rule": String(r.id), "data-built-in": String(r.built_in) }, h("td", null, r.name),
     h("td", { class: `prio-${r.priority}` }, r.priority),
     h("td", null, `${r.condition.kind}: ${describeCondition(r.condition)}`),
-    h("td", null, `${r.on_delay_s} s / ${r.off_delay_s} s`), h("td", null, (r.state ?? "—").replace(/_/g, " ")),
+    h("td", null, `${r.on_delay_s} s / ${r.off_delay_s} s`), h("td", null, stateText(r.state)),
     h("td", null, en), h("td", null, oos), h("td", null, del));
 }
 

@@ -4,16 +4,12 @@
 // (admin: create, enable, take out of service, delete).
 import { api, errorText, request } from "../api/client";
 import type { AlarmOut } from "../api/types";
-import { alarmCenter, byPriorityThenTime } from "../lib/alarms";
+import { alarmCenter, byPriorityThenTime, stateText } from "../lib/alarms";
 import { h, notice } from "../lib/dom";
 import { time } from "../lib/format";
 import { atLeast, roleReason } from "../lib/session";
 import { rulesPanel } from "./alarm_rules";
 import type { Page, PageContext } from "./types";
-
-const STATE_TEXT: Record<string, string> = { unack: "active, unacknowledged", ack: "active, acknowledged",
-  rtn_unack: "cleared, unacknowledged", shelved: "shelved", suppressed: "suppressed by design",
-  out_of_service: "out of service", normal: "normal" };
 
 type Run = (what: string, fn: () => Promise<unknown>) => Promise<void>;
 type Fail = (what: string, e: unknown) => void;
@@ -30,7 +26,7 @@ function alarmHistory(id: number, fail: Fail): { el: HTMLElement; toggle: HTMLEl
     try {
       const d = await api.alarm(id);
       el.replaceChildren(...d.history.map((e) => h("li", null, `${time(e.at)} ${e.kind}`,
-        e.state_to ? ` → ${STATE_TEXT[e.state_to] ?? e.state_to}` : "", e.username ? ` by ${e.username}` : "",
+        e.state_to ? ` → ${stateText(e.state_to)}` : "", e.username ? ` by ${e.username}` : "",
         e.comment ? `: “${e.comment}”` : "", e.message ? ` (${e.message})` : "")));
     } catch (e) {
       fail("History", e);
@@ -73,13 +69,14 @@ function alarmRow(a0: AlarmOut, canAct: boolean, run: Run, fail: Fail): Row {
     () => request("POST", "/api/locks", { body: { alarm_id: a.id, note: `alarm ${a.id}: ${a.name}` } })) },
   "Lock footage");
   const actions = h("div", { class: "alarm-actions" },
-    canAct ? [comment, ack, minutes, reason, shelve, oneShot, unshelve, lock] : null, history.toggle, playback);
+    canAct ? [comment, ack, h("span", { class: "inline-unit" }, minutes, " min"), reason, shelve, oneShot, unshelve, lock]
+      : null, history.toggle, playback);
   const tr = h("tr", { "data-alarm": String(a.id) }, ...cells, h("td", null, actions, history.el));
 
   function update(next: AlarmOut): void {
     a = next;
     tr.dataset.state = a.state;
-    const state = (STATE_TEXT[a.state] ?? a.state) + (a.state === "shelved" && a.shelved_one_shot ? " until it clears" : "");
+    const state = stateText(a.state) + (a.state === "shelved" && a.shelved_one_shot ? " until it clears" : "");
     const texts = [a.priority, `${a.name}${a.message ? ` — ${a.message}` : ""}`, state,
       time(a.activated_at), a.cleared_at ? time(a.cleared_at) : "—", a.target_id != null ? `#${a.target_id}` : "—",
       a.acked_by ? `${a.acked_by}, ${time(a.acked_at)}` : "—"];
