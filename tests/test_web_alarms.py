@@ -82,6 +82,7 @@ def test_banner_ack_across_consoles_and_zones(server: Server, chromium: Any) -> 
         row_a = a.locator(f'tr[data-alarm="{alarm["id"]}"]')
         row_a.wait_for()
         assert "unacknowledged" in row_a.locator("td").nth(2).inner_text()
+        assert not row_a.get_by_role("button", name="Unshelve").is_visible()  # only a shelved alarm has it
         row_b = b.locator(f'tr[data-alarm="{alarm["id"]}"]')
         row_b.get_by_label(f"Comment for acknowledging alarm {alarm['id']}").fill("walker checked on camera")
         t_ack = time.time()
