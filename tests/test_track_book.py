@@ -1,14 +1,20 @@
 """The tracks' summaries (server.services.tracks.TrackBook), pure and alone: the peak speed is the speed of
-a least-squares line through a second of positions, so the noise of single positions does not make it."""
+a least-squares line through a second of positions, so the noise of single positions does not make it; and
+their writing (flush, on a real SQLite file): a track only once it was seen in MIN_DETECTIONS frames."""
 
 from __future__ import annotations
 
 import math
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
+from sqlalchemy import select
 
-from server.services.tracks import TrackBook, fitted_speed
+from server.db.engine import make_engine, session_factory, upgrade
+from server.db.models import Track, TrackPoint
+from server.services.tracks import MIN_DETECTIONS, TrackBook, fitted_speed, flush
 
 FPS = 30.0
 
@@ -63,3 +69,34 @@ def test_no_speed_before_half_a_second_of_positions() -> None:
     book = TrackBook(sample_hz=10.0)
     _feed(book, _walk([(3.0, 0.4)], sigma=0.0))
     assert book.tracks[(0, 1)].peak_speed_mps == 0.0
+
+
+def test_a_track_is_written_once_seen_in_enough_frames_and_a_short_one_never(tmp_path: Path) -> None:
+    # a real SQLite file built by the migrations
+    url = f"sqlite:///{tmp_path / 'tmeye.db'}"
+    upgrade(url)
+    sessions = session_factory(make_engine(url))
+    book = TrackBook(sample_hz=10.0)
+    t0 = 1.7e9
+    walker = _walk([(1.4, 2.0)], sigma=0.0)
+
+    def frame(i: int, with_blip: bool) -> dict[str, Any]:
+        dets = [{"track_id": 1, "x": walker[i][0], "y": 0.2, "z": 8.0, "r": 8.0, "theta_deg": 0.0, "phi_deg": 0.0}]
+        if with_blip:  # a blip of noise: track 2, three frames
+            dets.append({"track_id": 2, "x": 3.0, "y": 0.0, "z": 20.0, "r": 20.2, "theta_deg": 8.5, "phi_deg": 0.0})
+        return {"captured_at": t0 + i / FPS, "detections": dets}
+
+    for i in range(MIN_DETECTIONS - 1):
+        book.add(frame(i, with_blip=i < 3))
+    assert flush(sessions, "run", book) == 0  # neither was seen in MIN_DETECTIONS frames yet
+    for i in range(MIN_DETECTIONS - 1, len(walker)):
+        book.add(frame(i, with_blip=False))
+    written = flush(sessions, "run", book)
+    with sessions() as db:
+        rows = list(db.scalars(select(Track)))
+        points = list(db.scalars(select(TrackPoint)))
+    assert [(r.track_no, r.detections) for r in rows] == [(1, len(walker))]
+    assert written == len(points) == 20  # 2 s at 10 Hz, the first frames' samples kept while it waited
+    assert points[0].t == pytest.approx(t0)
+    book.forget_before(t0 + 100.0)
+    assert book.tracks == {}  # the short one too: it would never be written

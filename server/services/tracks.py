@@ -27,6 +27,10 @@ log = logging.getLogger("tmeye.tracks")
 # (the endless scene, measured in the console's Tracks table): a range 1-σ of 0.1 m over 2 frames is 2 m/s
 SPEED_WINDOW_S = 1.0
 SPEED_MIN_SPAN_S = 0.5
+# a track is written once it was detected in this many frames: the single frames of noise, a leaf or the
+# edge of a light change (tracks of 1 to 4 detections and 0.05 m across in a minute of the endless scene)
+# are not tracks an operator looks for (as an NVR's event needs a few frames)
+MIN_DETECTIONS = 5
 
 
 @dataclass
@@ -99,19 +103,20 @@ class TrackBook:
                                "theta_deg": float(d["theta_deg"]), "phi_deg": float(d["phi_deg"])})
 
     def forget_before(self, t: float) -> None:
-        """Drop summaries last seen before t that have nothing left to write."""
-        for k in [k for k, tr in self.tracks.items() if tr.last_seen < t and not tr.dirty]:
+        """Drop summaries last seen before t that have nothing left to write (or never will: too short)."""
+        for k in [k for k, tr in self.tracks.items()
+                  if tr.last_seen < t and (not tr.dirty or tr.detections < MIN_DETECTIONS)]:
             del self.tracks[k]
 
 
 def flush(sessions: sessionmaker[Session], run_id: str, book: TrackBook, replay_id: int | None = None) -> int:
-    """Write every changed track and its new samples in one transaction; returns the samples written.
-    `replay_id`: the tracks are a replay's (None: the live runtime's)."""
+    """Write every changed track of at least MIN_DETECTIONS detections and its new samples in one
+    transaction (a shorter one waits, its samples kept); returns the samples written. `replay_id`: the
+    tracks are a replay's (None: the live runtime's)."""
     n = 0
+    written = [tr for tr in book.tracks.values() if tr.dirty and tr.detections >= MIN_DETECTIONS]
     with sessions() as db, db.begin():
-        for tr in book.tracks.values():
-            if not tr.dirty:
-                continue
+        for tr in written:
             row = db.get(Track, tr.db_id) if tr.db_id is not None else None
             if row is None:
                 row = Track(run_id=f"{run_id}.{tr.generation}", track_no=tr.track_no, first_seen=tr.first_seen,
@@ -124,7 +129,7 @@ def flush(sessions: sessionmaker[Session], run_id: str, book: TrackBook, replay_
             if tr.pending:  # one executemany (Core): the ORM's per-object work would hold the GIL
                 db.execute(insert(TrackPoint), [{"track_id": row.id, **p} for p in tr.pending])
             n += len(tr.pending)
-    for tr in book.tracks.values():  # committed: only now forget what was written
+    for tr in written:  # committed: only now forget what was written
         tr.pending.clear()
         tr.dirty = False
     return n
