@@ -99,3 +99,38 @@ def test_fast_renderer_matches_exact_ray_casting() -> None:
         finite = np.isfinite(da)
         assert np.array_equal(finite, np.isfinite(db))
         assert np.allclose(da[finite], db[finite], rtol=1e-4)
+
+
+def test_a_surface_reaching_behind_the_cameras_is_cast_over_its_own_box_only() -> None:
+    """pixel_box boxes the part of a surface in front of a camera instead of casting the whole image where
+    the surface reaches behind it: a bush wholly behind the cameras (the mount turned away) gets no box,
+    and a long moving wall that passes beside the cameras from behind them to 20 m ahead gets a box
+    smaller than the image in which the cast draws exactly what the exact ray cast draws in the whole
+    image."""
+    from tracker.geometry import gimbal_rotation
+    from tracker.sim import cast
+    from tracker.sim.scene import Surface, smooth_texture
+
+    sim = SimRig(get_scenario("foliage"), noise_sigma=0.0)
+    assert sim._foliage is not None
+    h, w = 480, 640
+    for pan, tilt in ((105.0, 0.0), (160.0, 70.0), (-120.0, 0.0)):
+        for view in sim.renderer.views:
+            assert cast.pixel_box(view, sim._foliage.corners() @ gimbal_rotation(pan, tilt)) is None
+    ex, ey, ez = np.eye(3)
+    tex = smooth_texture(np.random.default_rng(3), (120, 900), 2.0, 40, 220)
+    wall = Surface("wall", np.array([-2.0, 0.0, 5.0]), ez, ey, 15.0, 2.0, tex, 1.0 / 30, moving=True, target_id=3)
+    for pan, tilt in ((0.0, 0.0), (-20.0, 5.0), (20.0, 0.0)):
+        R = gimbal_rotation(pan, tilt)
+        for view in sim.renderer.views:
+            box = cast.pixel_box(view, wall.corners() @ R)
+            assert box is not None and box != (0, 0, w, h)
+            a, b = np.zeros((h, w), np.uint8), np.zeros((h, w), np.uint8)
+            da, db = np.full((h, w), np.inf, np.float32), np.full((h, w), np.inf, np.float32)
+            ia, ib = np.zeros((h, w), np.uint8), np.zeros((h, w), np.uint8)
+            cast.cast_plane_fast(view, R, wall, a, da, 0.0, ia)  # over pixel_box's box
+            cast.cast_surface_exact(view, R, wall, 0.0, b, db, ib)
+            x0, y0, x1, y1 = box
+            assert not ib[:y0].any() and not ib[y1:].any() and not ib[:, :x0].any() and not ib[:, x1:].any()
+            assert np.count_nonzero(ib) > 0 and (ia != ib).mean() < 1e-4, (pan, tilt)
+            assert (np.abs(a.astype(int) - b.astype(int)) > 1).mean() < 1e-4

@@ -46,6 +46,9 @@ def make_view(cam: Camera) -> View:
                 (float(yn.min()) - 0.02, float(yn.max()) + 0.02), xy, ray_len, area)
 
 
+_MARGIN = 64.0  # texels kept beyond a surface's extent before its texture is sampled (cast_plane_fast)
+
+
 def cast_plane_fast(view: View, R_wr: F64, s: Surface, img: F32 | U8, depth: F32, t: float = 0.0,
                     ids: U8 | None = None, box: tuple[int, int, int, int] | None = None) -> None:
     """Ray-cast a rectangular surface over its bounding box with OpenCV calls: on a plane the texture
@@ -77,7 +80,13 @@ def cast_plane_fast(view: View, R_wr: F64, s: Surface, img: F32 | U8, depth: F32
         b = (mxy[..., 1] - np.float32(th / 2.0)) * np.float32(s.texel_m)
         da, db = s.sway(t, a, b)
         mxy = np.dstack([mxy[..., 0] + da / np.float32(s.texel_m), mxy[..., 1] + db / np.float32(s.texel_m)])
-    val = cv2.remap(s._tex32, mxy.astype(np.float32), None, cv2.INTER_LINEAR,  # type: ignore[call-overload]
+    # where the plane is seen edge-on or behind the camera the homography sends pixels millions of texels
+    # away, and OpenCV's reflect-101 border folds such a coordinate back one texture width at a time (a
+    # bush beside the cameras with the mount at pan 90 deg: 40 ms a remap, 3 frames a second). Those pixels
+    # are not hit; the hit ones lie within the surface's extent plus its sway (centimetres), kept whole
+    lo, hi = (tw / 2.0 - hw - _MARGIN, th / 2.0 - hh - _MARGIN), (tw / 2.0 + hw + _MARGIN, th / 2.0 + hh + _MARGIN)
+    mxy = np.asarray(cv2.max(cv2.min(np.asarray(mxy, np.float32), hi + (0.0, 0.0)), lo + (0.0, 0.0)), np.float32)
+    val = cv2.remap(s._tex32, mxy, None, cv2.INTER_LINEAR,  # type: ignore[call-overload]
                     borderMode=cv2.BORDER_REFLECT101)
     den = n_c[0] * xy[..., 0] + n_c[1] * xy[..., 1] + np.float32(n_c[2])
     with np.errstate(divide="ignore"):
@@ -90,19 +99,29 @@ def cast_plane_fast(view: View, R_wr: F64, s: Surface, img: F32 | U8, depth: F32
         ids[y0:y1, x0:x1][hit] = s.target_id
 
 
+_NEAR_Z = 0.01  # m: pixel_box's near plane
 _EDGE = np.linspace(0.0, 1.0, 9)
 _BOX_X = np.concatenate([_EDGE, np.ones(9), _EDGE, np.zeros(9)])  # 9 points along each side of a unit box
 _BOX_Y = np.concatenate([np.zeros(9), _EDGE, np.ones(9), _EDGE])
 
 
 def pixel_box(view: View, pts_rig: F64, pad: int = 2) -> tuple[int, int, int, int] | None:
-    """Pixel bounding box (x0, y0, x1, y1) of rig-frame points (N, 3) as seen by `view`, or None when
-    they are all outside the image; the whole image when some point is behind the camera."""
+    """Pixel bounding box (x0, y0, x1, y1) of the convex hull of rig-frame points (N, 3) as seen by `view`,
+    or None when it lies outside the image. Where the hull reaches behind the camera, its part in front
+    of the plane z = _NEAR_Z (camera frame, m) is boxed: the points before that plane and the points where
+    the segments from each of them to each point behind it cross it (the whole image was cast before: a
+    bush beside the cameras with the mount at pan 90 deg, its texture sampled at every pixel, 3 frames a
+    second). Casts draw no pixel nearer than 0.05 m along its ray, z > 0.038 m at this field of view."""
     cam = view.cam
     w, h = cam.size
     Xc = (pts_rig - cam.c) @ cam.R_rc.T
-    if np.any(Xc[:, 2] <= 0.05):
-        return 0, 0, w, h
+    front = Xc[:, 2] > _NEAR_Z
+    if not front.any():
+        return None
+    if not front.all():
+        a, b = Xc[front], Xc[~front]
+        t = (_NEAR_Z - a[:, None, 2]) / (b[None, :, 2] - a[:, None, 2])  # (n_front, n_behind), in [0, 1)
+        Xc = np.vstack([a, (a[:, None, :] + t[..., None] * (b[None, :, :] - a[:, None, :])).reshape(-1, 3)])
     xn, yn = Xc[:, 0] / Xc[:, 2], Xc[:, 1] / Xc[:, 2]
     x0, x1 = max(xn.min(), view.xn_range[0]), min(xn.max(), view.xn_range[1])
     y0, y1 = max(yn.min(), view.yn_range[0]), min(yn.max(), view.yn_range[1])
