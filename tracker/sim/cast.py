@@ -84,8 +84,9 @@ def cast_plane_fast(view: View, R_wr: F64, s: Surface, img: F32 | U8, depth: F32
     # away, and OpenCV's reflect-101 border folds such a coordinate back one texture width at a time (a
     # bush beside the cameras with the mount at pan 90 deg: 40 ms a remap, 3 frames a second). Those pixels
     # are not hit; the hit ones lie within the surface's extent plus its sway (centimetres), kept whole
-    lo, hi = (tw / 2.0 - hw - _MARGIN, th / 2.0 - hh - _MARGIN), (tw / 2.0 + hw + _MARGIN, th / 2.0 + hh + _MARGIN)
-    mxy = np.asarray(cv2.max(cv2.min(np.asarray(mxy, np.float32), hi + (0.0, 0.0)), lo + (0.0, 0.0)), np.float32)
+    lo = np.array([tw / 2.0 - hw - _MARGIN, th / 2.0 - hh - _MARGIN], np.float32)
+    hi = np.array([tw / 2.0 + hw + _MARGIN, th / 2.0 + hh + _MARGIN], np.float32)
+    mxy = np.clip(np.asarray(mxy, np.float32), lo, hi)
     val = cv2.remap(s._tex32, mxy, None, cv2.INTER_LINEAR,  # type: ignore[call-overload]
                     borderMode=cv2.BORDER_REFLECT101)
     den = n_c[0] * xy[..., 0] + n_c[1] * xy[..., 1] + np.float32(n_c[2])
