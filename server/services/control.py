@@ -3,12 +3,15 @@ frames), presets and settings changes in the database, every action audited."""
 
 from __future__ import annotations
 
+import logging
 import time
+from collections.abc import Callable
 from concurrent.futures import Future
 from concurrent.futures import TimeoutError as FutureTimeout
 from typing import Any, TypeVar
 
 from sqlalchemy import select
+from sqlalchemy.exc import OperationalError
 from sqlalchemy.orm import Session
 
 from server.db.models import ServoPreset, SettingsChange, User
@@ -18,6 +21,7 @@ from tmeye.runtime import NoServoError, Runtime, ServoMode, ServoRequestError, T
 
 T = TypeVar("T")
 REQUEST_TIMEOUT_S = 2.0
+log = logging.getLogger("tmeye.control")
 
 
 class Unavailable(RuntimeError):
@@ -53,42 +57,67 @@ def servo_state(rt: Runtime) -> dict[str, Any]:
     return out
 
 
+def _written_first(db: Session) -> None:
+    """Write an action's rows (its audit record) before the runtime is asked: a locked or read-only database
+    refuses the action (503) before anything is done."""
+    db.flush()
+
+
+def _commit_or_undo(db: Session, undo: Callable[[], Future[Any]]) -> None:
+    """Commit an action's rows, written before the runtime took the request. Should the commit itself fail
+    (a disk full at that moment), the request is undone first, so the 503 ("nothing was changed") holds and
+    no control action goes unaudited."""
+    try:
+        db.commit()
+    except OperationalError:
+        try:
+            undo().result(timeout=REQUEST_TIMEOUT_S)
+        except Exception as exc:  # the 503 still goes out; the log says what stands
+            log.warning("a request whose audit record was refused could not be undone: %s", exc)
+        raise
+
+
 def set_mode(db: Session, rt: Runtime, user: User, address: str, mode: str) -> dict[str, Any]:
-    wait(rt.servo_mode(ServoMode(mode)))
     audit.record(db, user, address, "servo.mode", mode)
-    db.commit()
+    _written_first(db)
+    before = wait(rt.servo_mode(ServoMode(mode)))
+    _commit_or_undo(db, lambda: rt.servo_restore(before))
     return servo_state(rt)
 
 
 def goto(db: Session, rt: Runtime, user: User, address: str, pan_deg: float, tilt_deg: float,
          action: str = "servo.goto", target: str | None = None) -> dict[str, Any]:
-    wait(rt.servo_goto(pan_deg, tilt_deg))
     audit.record(db, user, address, action, target, {"pan_deg": pan_deg, "tilt_deg": tilt_deg})
-    db.commit()
+    _written_first(db)
+    before = wait(rt.servo_goto(pan_deg, tilt_deg))
+    _commit_or_undo(db, lambda: rt.servo_restore(before))
     return servo_state(rt)
 
 
 def point(db: Session, rt: Runtime, user: User, address: str, camera: str, u: float, v: float) -> dict[str, Any]:
-    pan, tilt = wait(rt.servo_point(camera, u, v))
-    audit.record(db, user, address, "servo.point", camera, {"u": u, "v": v, "pan_deg": round(pan, 4),
-                                                           "tilt_deg": round(tilt, 4)})
-    db.commit()
+    entry = audit.record(db, user, address, "servo.point", camera, {"u": u, "v": v})
+    _written_first(db)
+    pan, tilt, before = wait(rt.servo_point(camera, u, v))
+    entry.detail = {"u": u, "v": v, "pan_deg": round(pan, 4), "tilt_deg": round(tilt, 4)}
+    _commit_or_undo(db, lambda: rt.servo_restore(before))
     return servo_state(rt)
 
 
 def select_primary(db: Session, rt: Runtime, user: User, address: str, track_id: int) -> None:
+    audit.record(db, user, address, "track.primary", str(track_id))
+    _written_first(db)
     if not wait(rt.select_primary(track_id)):
         raise NotFound(f"no live track {track_id} (it may have ended)")
-    audit.record(db, user, address, "track.primary", str(track_id))
     db.commit()
 
 
 def jog(db: Session, rt: Runtime, user: User, address: str, pan_dps: float, tilt_dps: float,
         duration_s: float) -> dict[str, Any]:
-    wait(rt.servo_jog(pan_dps, tilt_dps, duration_s))
     audit.record(db, user, address, "servo.jog", None,
                  {"pan_dps": pan_dps, "tilt_dps": tilt_dps, "duration_s": duration_s})
-    db.commit()
+    _written_first(db)
+    before = wait(rt.servo_jog(pan_dps, tilt_dps, duration_s))
+    _commit_or_undo(db, lambda: rt.servo_restore(before))
     return servo_state(rt)
 
 
@@ -150,12 +179,14 @@ def saved_tuning(db: Session) -> dict[str, dict[str, Any]] | None:
 
 def update_tuning(db: Session, rt: Runtime, user: User, address: str, new: dict[str, dict[str, Any]]
                   ) -> dict[str, dict[str, Any]]:
-    before = rt.tuning.as_dict()
-    tuning = tuning_from_dict(rt.tuning, new)
-    wait(rt.set_tuning(tuning))
+    old = rt.tuning
+    before = old.as_dict()
+    tuning = tuning_from_dict(old, new)
     after = tuning.as_dict()
     db.add(SettingsChange(at=time.time(), user_id=user.id, section="tracker", before=before, after=after))
     changed = {s: {k: v for k, v in after[s].items() if before[s][k] != v} for s in after}
     audit.record(db, user, address, "tracker.config", None, {s: c for s, c in changed.items() if c})
-    db.commit()
+    _written_first(db)
+    wait(rt.set_tuning(tuning))
+    _commit_or_undo(db, lambda: rt.set_tuning(old))
     return after

@@ -43,6 +43,9 @@ def check_angles(pan_deg: float, tilt_deg: float, pan: AxisLimits, tilt: AxisLim
                                     f"{lim.min_deg:g} to {lim.max_deg:g} degrees")
 
 
+ServoWish = tuple[ServoMode, tuple[float, float] | None]  # a mode and its goal, what restore() goes back to
+
+
 class ServoControl:
     """The operator's wishes applied to an AimController (whose manual mode does the rate-limited motion)."""
 
@@ -73,6 +76,20 @@ class ServoControl:
         elif mode in (ServoMode.HOLD, ServoMode.MANUAL):
             sp = c.setpoint
             self._manual((sp.pan_deg, sp.tilt_deg))
+        self.mode = mode
+
+    def wish(self) -> ServoWish:
+        """The operator's mode and goal now (restore() goes back to them)."""
+        return self.mode, self.goal
+
+    def restore(self, wish: ServoWish) -> None:
+        """Back to an earlier mode and goal (a request undone: its audit record could not be stored)."""
+        mode, goal = wish
+        if mode is ServoMode.AUTO or goal is None:
+            self.set_mode(mode)
+            return
+        self._jog = None
+        self._manual(goal)
         self.mode = mode
 
     def goto(self, pan_deg: float, tilt_deg: float) -> None:

@@ -27,7 +27,7 @@ from tmeye.runtime.events import FrameEvent, ServoState
 from tmeye.runtime.faults import SourceHealth
 from tmeye.runtime.pointing import pixel_angles
 from tmeye.runtime.publish import Hub
-from tmeye.runtime.servo import ServoControl, ServoMode
+from tmeye.runtime.servo import ServoControl, ServoMode, ServoWish
 from tmeye.runtime.stalls import StallLog
 from tmeye.runtime.telemetry import detection_json, telemetry
 from tracker.closedloop import LoopStep
@@ -332,18 +332,31 @@ class Runtime:
                 fut.set_exception(RuntimeError("the tracker runtime stopped"))
 
     # --- servo requests ------------------------------------------------------------------------------
-    def servo_mode(self, mode: ServoMode) -> Future[None]:
-        return self.submit(lambda: self._need_servo().set_mode(mode))
+    # each servo request's Future holds the mode and goal from before it (servo_restore undoes it)
+    def servo_mode(self, mode: ServoMode) -> Future[ServoWish]:
+        return self._servo_request(lambda s: s.set_mode(mode))
 
-    def servo_goto(self, pan_deg: float, tilt_deg: float) -> Future[None]:
-        return self.submit(lambda: self._need_servo().goto(pan_deg, tilt_deg))
+    def servo_goto(self, pan_deg: float, tilt_deg: float) -> Future[ServoWish]:
+        return self._servo_request(lambda s: s.goto(pan_deg, tilt_deg))
 
-    def servo_jog(self, pan_dps: float, tilt_dps: float, duration_s: float) -> Future[None]:
-        return self.submit(lambda: self._need_servo().jog(pan_dps, tilt_dps, duration_s))
+    def servo_jog(self, pan_dps: float, tilt_dps: float, duration_s: float) -> Future[ServoWish]:
+        return self._servo_request(lambda s: s.jog(pan_dps, tilt_dps, duration_s))
 
-    def servo_point(self, camera: str, u: float, v: float) -> Future[tuple[float, float]]:
-        """Point the mount so that what is seen at raw pixel (u, v) of `camera` comes to its centre."""
+    def servo_restore(self, wish: ServoWish) -> Future[ServoWish]:
+        return self._servo_request(lambda s: s.restore(wish))
+
+    def servo_point(self, camera: str, u: float, v: float) -> Future[tuple[float, float, ServoWish]]:
+        """Point the mount so that what is seen at raw pixel (u, v) of `camera` comes to its centre: the
+        angles, and the mode and goal from before."""
         return self.submit(lambda: self._point(camera, u, v))
+
+    def _servo_request(self, change: Callable[[ServoControl], None]) -> Future[ServoWish]:
+        def apply() -> ServoWish:
+            servo = self._need_servo()
+            before = servo.wish()
+            change(servo)
+            return before
+        return self.submit(apply)
 
     def select_primary(self, track_id: int) -> Future[bool]:
         """Make a living track the primary target; the Future holds False if there is no such track."""
@@ -355,12 +368,13 @@ class Runtime:
             return ok
         return self.submit(apply)
 
-    def _point(self, camera: str, u: float, v: float) -> tuple[float, float]:
+    def _point(self, camera: str, u: float, v: float) -> tuple[float, float, ServoWish]:
         servo = self._need_servo()
         assert self.comp is not None
         pan, tilt = pixel_angles(self.comp, self.latest, camera, u, v)
+        before = servo.wish()
         servo.goto(pan, tilt)
-        return pan, tilt
+        return pan, tilt, before
 
     def _need_servo(self) -> ServoControl:
         if self.servo is None:
