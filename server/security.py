@@ -103,9 +103,11 @@ class LoginThrottle:
     def __init__(self, per_user: int, per_address: int, window_s: float, clock: Callable[[], float] = time.monotonic):
         self.per_user, self.per_address, self.window_s, self.clock = per_user, per_address, window_s, clock
         self._fails: dict[tuple[str, str], deque[float]] = {}
+        self._sweep_at = 1024  # keys held when the next sweep of expired ones runs
 
     def _recent(self, key: tuple[str, str]) -> deque[float]:
-        q = self._fails.setdefault(key, deque())
+        """The key's failures within the window (a new, unstored queue for a key with none)."""
+        q = self._fails.get(key, deque())
         cutoff = self.clock() - self.window_s
         while q and q[0] <= cutoff:
             q.popleft()
@@ -120,9 +122,17 @@ class LoginThrottle:
         return max(1, int(max(waits)) + 1) if waits else 0
 
     def failed(self, username: str, address: str) -> None:
+        """Count a failure. Keys whose failures have all expired are dropped once the keys held double:
+        names tried once each (a spray of usernames) do not pile up in memory."""
         now = self.clock()
-        self._recent(("user", username.lower())).append(now)
-        self._recent(("addr", address)).append(now)
+        for key in (("user", username.lower()), ("addr", address)):
+            q = self._recent(key)
+            q.append(now)
+            self._fails[key] = q
+        if len(self._fails) >= self._sweep_at:
+            cutoff = now - self.window_s
+            self._fails = {k: q for k, q in self._fails.items() if q[-1] > cutoff}
+            self._sweep_at = max(1024, 2 * len(self._fails))
 
     def succeeded(self, username: str) -> None:
         self._fails.pop(("user", username.lower()), None)

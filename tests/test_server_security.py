@@ -52,3 +52,21 @@ def test_throttle_by_username_and_by_address() -> None:
     assert th.retry_after("someone-else", "9.9.9.9") > 0
     th.succeeded("bob")
     assert th.retry_after("bob", "1.2.3.4") == 0
+
+
+def test_throttle_memory_stays_bounded_under_a_spray_of_usernames() -> None:
+    now = [0.0]
+    th = LoginThrottle(per_user=5, per_address=20, window_s=600, clock=lambda: now[0])
+    for i in range(5000):  # asking stores nothing
+        assert th.retry_after(f"probe{i}", "1.2.3.4") == 0
+    assert len(th._fails) == 0
+    for i in range(100_000):  # a spray from many addresses, each name tried once, a minute apart in blocks
+        now[0] = 60.0 * (i // 1000)
+        th.failed(f"name{i}", f"10.0.0.{i % 200}")
+    # only keys with a failure within the last 10 minutes stay (11 blocks of 1,000 names, 200 addresses),
+    # swept as the keys held double: 100,200 without the sweep
+    assert len(th._fails) <= 2 * (11 * 1000 + 200)
+    assert th.retry_after("name99999", "1.1.1.1") == 0 and th.retry_after("x", "10.0.0.7") > 0
+    for _ in range(5):
+        th.failed("carol", "2.2.2.2")
+    assert th.retry_after("carol", "3.3.3.3") > 0  # still throttled as before
