@@ -14,6 +14,20 @@ from tmeye.errors import UserError
 LOG_FORMAT = "%(asctime)s %(levelname)s %(name)s: %(message)s"
 
 
+class OneLineFormatter(logging.Formatter):
+    """Every event on one line: a traceback (or a multi-line message) follows its message with its lines
+    joined by " | ", so a log reader or grep sees one event per line."""
+
+    def format(self, record: logging.LogRecord) -> str:
+        return " | ".join(line for line in super().format(record).splitlines() if line.strip())
+
+
+def one_line_logging(level: str) -> None:
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(OneLineFormatter(LOG_FORMAT))
+    logging.basicConfig(level=level.upper(), handlers=[handler], force=True)
+
+
 def register(subparsers: Any) -> None:
     p = subparsers.add_parser("serve", help="run the operator console server (REST, WebSocket, browser console)")
     p.add_argument("--host", help="address to listen on (default 127.0.0.1)")
@@ -84,7 +98,7 @@ def run(args: argparse.Namespace) -> int:
     # The tracker's worker thread and the event loop share the GIL: hand it over within 1 ms (Python's
     # default 5 ms delayed WebSocket sends by up to that while the worker ran Python code).
     sys.setswitchinterval(0.001)
-    logging.basicConfig(level=settings.log_level.upper(), format=LOG_FORMAT, stream=sys.stderr, force=True)
+    one_line_logging(settings.log_level)
     try:
         sock = socket.create_server((settings.host, settings.port), reuse_port=False)
     except OSError as exc:
