@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, JsonValue
 
 Priority = Literal["critical", "high", "medium", "low"]
 AlarmState = Literal["unack", "ack", "rtn_unack", "shelved", "suppressed", "out_of_service", "normal"]
@@ -19,6 +19,10 @@ class ZoneCondition(Strict):
     """A target inside a box (x, y, z min and max) or a vertical cylinder (centre_x, centre_z, radius,
     optional y_min / y_max), in the telemetry's frame (x right, y down, z forward, m); dwell_s: how long
     it must stay inside."""
+
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"kind": "zone", "shape": "box", "x_min": -2.0, "x_max": 2.0, "z_min": 5.0, "z_max": 12.0, "dwell_s": 2.0},
+        {"kind": "zone", "shape": "cylinder", "center_x": 0.0, "center_z": 10.0, "radius": 3.0}]})
 
     kind: Literal["zone"]
     shape: Literal["box", "cylinder"] = "box"
@@ -35,6 +39,9 @@ class ZoneCondition(Strict):
 
 
 class RangeBelowCondition(Strict):
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"kind": "range_below", "distance_m": 8.0}]})
+
     kind: Literal["range_below"]
     distance_m: float = Field(gt=0, le=1000)
 
@@ -42,6 +49,9 @@ class RangeBelowCondition(Strict):
 class ApproachCondition(Strict):
     """Closing speed −dr/dt of the primary target (from the predictor) above speed_mps for for_s; it stays
     true until the speed falls under speed_mps − deadband_mps (ISA-18.2 deadband, against chattering)."""
+
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"kind": "approach", "speed_mps": 1.5, "for_s": 1.0, "deadband_mps": 0.3}]})
 
     kind: Literal["approach"]
     speed_mps: float = Field(gt=0, le=100)
@@ -51,6 +61,9 @@ class ApproachCondition(Strict):
 
 class SizeCondition(Strict):
     """A target whose metric width and height (m, from its disparity) lie inside the bounds."""
+
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"kind": "size", "width_min": 1.5, "height_max": 2.5}]})
 
     kind: Literal["size"]
     width_min: float = Field(0.0, ge=0)
@@ -62,6 +75,9 @@ class SizeCondition(Strict):
 class LostCondition(Strict):
     """The primary target not seen for longer than after_s. Suppressed by design while the mount is not in
     auto mode (manual, hold or home: the operator points it)."""
+
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"kind": "lost", "after_s": 5.0}]})
 
     kind: Literal["lost"]
     after_s: float = Field(gt=0, le=3600)
@@ -86,6 +102,9 @@ class AlarmRuleIn(Strict):
 
 
 class AlarmRulePatch(Strict):
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"priority": "high", "on_delay_s": 1.0}, {"enabled": False}]})
+
     name: str | None = Field(None, min_length=1, max_length=128)
     priority: Priority | None = None
     condition: Condition | None = None
@@ -96,6 +115,12 @@ class AlarmRulePatch(Strict):
 
 
 class AlarmRuleOut(BaseModel):
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"id": 1, "name": "Gate zone", "priority": "critical", "condition": {"kind": "zone", "shape": "box",
+         "x_min": -2.0, "x_max": 2.0, "z_min": 5.0, "z_max": 12.0, "dwell_s": 2.0}, "on_delay_s": 0.5,
+         "off_delay_s": 2.0, "enabled": True, "out_of_service": False, "created_at": 1795000000.1,
+         "updated_at": 1795000000.1, "built_in": False, "state": "normal"}]})
+
     id: int
     name: str
     priority: Priority
@@ -137,7 +162,14 @@ class AlarmOut(BaseModel):
     shelved_one_shot: bool = Field(description="shelved until the alarm next clears (OPC UA one-shot shelving)")
 
 
+_EVENT_EXAMPLE: dict[str, JsonValue] = {
+    "id": 31, "at": 1795000000.1, "kind": "activated", "state_from": "normal", "state_to": "unack", "username": None,
+    "comment": None, "frame": 1234, "target_id": 3, "message": None}
+
+
 class AlarmEventOut(BaseModel):
+    model_config = ConfigDict(json_schema_extra={"examples": [_EVENT_EXAMPLE]})
+
     id: int
     at: float
     kind: str = Field(description="activated, cleared, acknowledged, shelved, unshelved, suppressed, "
@@ -152,16 +184,29 @@ class AlarmEventOut(BaseModel):
 
 
 class AlarmDetail(AlarmOut):
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"id": 7, "rule_id": 1, "rule_key": "rule:1", "name": "Gate zone", "priority": "critical", "state": "unack",
+         "activated_at": 1795000000.1, "cleared_at": None, "acked_at": None, "acked_by": None,
+         "updated_at": 1795000000.1, "frame": 1234, "target_id": 3, "run_id": "20261122T220000-123.0",
+         "message": None, "shelved_until": None, "shelve_reason": None, "shelved_one_shot": False,
+         "history": [_EVENT_EXAMPLE], "track_id": 12, "playback_url": "#/playback?t=1794999990.100&alarm=7"}]})
+
     history: list[AlarmEventOut]
     track_id: int | None = Field(description="id of the triggering track in /api/tracks, once written")
     playback_url: str = Field(description="the console's playback at the alarm, pre-roll included")
 
 
 class AckRequest(Strict):
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"comment": "gardener, expected"}]})
+
     comment: str | None = Field(None, max_length=1000)
 
 
 class ShelveRequest(Strict):
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"minutes": 30, "reason": "maintenance at the gate"}, {"one_shot": True, "reason": "known visitor"}]})
+
     minutes: float | None = Field(None, gt=0, description="timed shelving: how long; at most the server's limit "
                                   "(8 h by default)")
     reason: str = Field(min_length=1, max_length=500)
@@ -170,6 +215,10 @@ class ShelveRequest(Strict):
 
 
 class AlarmSummary(BaseModel):
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"open": {"critical": 1, "high": 0, "medium": 2, "low": 0}, "unacknowledged": {"critical": 1, "high": 0,
+         "medium": 1, "low": 0}, "flood": False, "new_in_window": 3, "window_s": 600.0, "flooded_operators": []}]})
+
     open: dict[str, int] = Field(description="alarms in the list (unack, ack, rtn_unack) per priority")
     unacknowledged: dict[str, int]
     flood: bool = Field(description="the caller's flood: more than 10 new alarms in 10 minutes since they logged in "

@@ -32,6 +32,11 @@ class SegmentOut(BaseModel):
 
 
 class RecordingStatus(BaseModel):
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"mode": "continuous", "state": "recording", "fault": None, "segments": 12,
+         "frames": {"left": 240, "right": 240}, "bytes": 1843200, "errors": 0, "dropped_packets": 0,
+         "telemetry_rows": 249, "telemetry_missing": 0}]})
+
     mode: Literal["continuous", "events", "off"]
     state: Literal["recording", "idle", "off", "fault"]
     fault: str | None = Field(description="device fault: why recording stopped (e.g. the free-disk floor)")
@@ -72,7 +77,9 @@ class LockIn(Strict):
 
 
 class LockOut(BaseModel):
-    model_config = ConfigDict(from_attributes=True)
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"id": 2, "start": 1795000000.0, "end": 1795000060.0, "track_id": 12, "alarm_id": 7,
+         "note": "incident 2026-114", "created_at": 1795000100.0, "created_by": 2}]}, from_attributes=True)
 
     id: int
     start: float
@@ -92,7 +99,9 @@ class BookmarkIn(Strict):
 
 
 class BookmarkOut(BaseModel):
-    model_config = ConfigDict(from_attributes=True)
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"id": 4, "t": 1795000012.4, "note": "van at the gate", "created_at": 1795000100.0, "created_by": 2}]},
+        from_attributes=True)
 
     id: int
     t: float
@@ -111,7 +120,10 @@ class ExportIn(Strict):
 
 
 class ExportOut(BaseModel):
-    model_config = ConfigDict(from_attributes=True)
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"id": 5, "status": "done", "progress": 1.0, "start": 1795000000.0, "end": 1795000060.0,
+         "cameras": ["left", "right"], "bytes": 7340032, "error": None, "created_at": 1795000100.0,
+         "finished_at": 1795000104.2}]}, from_attributes=True)
 
     id: int
     status: Literal["queued", "running", "done", "failed"]
@@ -138,7 +150,13 @@ class ReplayIn(Strict):
 
 
 class ReplayOut(BaseModel):
-    model_config = ConfigDict(from_attributes=True)
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"id": 3, "status": "done", "progress": 1.0, "start": 1795000000.0, "end": 1795000030.0,
+         "settings": {"threshold": 14, "rig": "live", "scenario": "endless", "seed": 0, "targets": "auto",
+                      "background": "simulated scene endless", "predictor": None},
+         "frames": 900, "agreement": {"frames": 900, "same_count": 0.9911, "same_detected": 0.9922,
+                                      "both_detected": 861, "range_diff_median_m": 0.0031, "range_diff_p95_m": 0.0412},
+         "error": None, "created_at": 1795000100.0, "finished_at": 1795000131.5}]}, from_attributes=True)
 
     id: int
     status: Literal["queued", "running", "done", "failed"]

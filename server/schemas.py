@@ -17,6 +17,8 @@ class Strict(BaseModel):
 
 
 class Message(BaseModel):
+    model_config = ConfigDict(json_schema_extra={"examples": [{"detail": "no preset with id 99"}]})
+
     detail: str
 
 
@@ -31,6 +33,11 @@ class Health(BaseModel):
 
 
 class LoginAnswer(BaseModel):
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"access_token": "v1.SDfTtjnDHo0WuNra9dhmZ4yLiFoqs5lT.1795969483.Pt7M9g37pSTDFSAz7Z70jLSrnIZ-LkEt3P3BTzE0Uc0",
+         "token_type": "bearer", "role": "operator", "expires_in": 43200,
+         "csrf_token": "DgZmrHayYoo7-ZcUQ-vkkNNLJV4Ole2hZTvpCjbmdFY"}]})
+
     access_token: str
     token_type: Literal["bearer"] = "bearer"
     role: Role
@@ -39,11 +46,16 @@ class LoginAnswer(BaseModel):
 
 
 class Me(BaseModel):
+    model_config = ConfigDict(json_schema_extra={"examples": [{"username": "alice", "role": "operator"}]})
+
     username: str
     role: Role
 
 
 class Fault(BaseModel):
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"kind": "source", "message": "no frame from the cameras for 1.2 s"}]})
+
     kind: str
     message: str
 
@@ -65,6 +77,9 @@ class ServoStatus(BaseModel):
 
 
 class Percentiles(BaseModel):
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"n": 9027, "p50": 4.61, "p99": 8.767, "max": 10.617}]})
+
     n: int
     p50: float | None
     p99: float | None
@@ -72,6 +87,9 @@ class Percentiles(BaseModel):
 
 
 class Subscription(BaseModel):
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"name": "track-writer", "queued": 9, "delivered": 235, "dropped": 0}]})
+
     name: str
     queued: int
     delivered: int
@@ -79,6 +97,25 @@ class Subscription(BaseModel):
 
 
 class Status(BaseModel):
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"state": "running", "frame": 250, "fps": 30.01, "skipped_frames": 0, "frames_processed": 250,
+         "frame_errors": 0, "deferred_boxes": 179, "reused_sigma": 121, "source_faults": 0,
+         "source": {"kind": "sim", "fps": 30.0, "width": 640, "height": 480, "hfov_deg": 57.697, "vfov_deg": 44.307,
+                    "scenario": "endless", "seed": 0},
+         "servo": {"mode": "auto", "pan_deg": -20.376, "tilt_deg": -4.7281, "fault": None, "goal": None,
+                   "command": None, "configured": True, "limits": {"pan_deg": [-170.0, 170.0],
+                                                                  "tilt_deg": [-30.0, 80.0]}},
+         "faults": [], "subscribers": 4,
+         "event_loop_lag_ms": {"n": 600, "p50": 0.641, "p99": 2.772, "max": 5.03},
+         "ws_send_latency_ms": {"n": 9027, "p50": 4.61, "p99": 8.767, "max": 10.617},
+         "ws_delivery_ms": {"n": 9027, "p50": 0.882, "p99": 1.956, "max": 2.88},
+         "subscriptions": [{"name": "media", "queued": 0, "delivered": 250, "dropped": 0},
+                           {"name": "track-writer", "queued": 9, "delivered": 241, "dropped": 0}],
+         "frame_gap_max_ms": 41.2,
+         "recording": {"mode": "continuous", "state": "recording", "fault": None, "segments": 12,
+                       "frames": {"left": 240, "right": 240}, "bytes": 1843200, "errors": 0, "dropped_packets": 0,
+                       "telemetry_rows": 249, "telemetry_missing": 0}}]})
+
     state: str
     frame: int | None
     fps: float
@@ -110,6 +147,12 @@ class Status(BaseModel):
 
 
 class Detection(BaseModel):
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"track_id": 1, "box": [286, 162, 386, 318], "centroid": [336.09, 238.26], "area_px": 5618,
+         "disparity_px": 23.972, "size_m": [0.651, 1.714], "x": -0.0941, "y": 0.6447, "z": 7.4315, "r": 7.46,
+         "theta_deg": -0.7257, "phi_deg": -4.9581, "sigma_r": 0.0073, "sigma_theta_deg": 0.10173,
+         "sigma_phi_deg": 0.15651}]})
+
     track_id: int
     box: list[int] = Field(description="left-image box x0, y0, x1, y1 (px)")
     centroid: list[float] = Field(description="eq. (10) centroid in the left image (px)")
@@ -186,13 +229,17 @@ class PointRequest(Strict):
 
 
 class PresetIn(Strict):
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"name": "gate", "pan_deg": 12.5, "tilt_deg": -3.0}, {"name": "here"}]})
+
     name: str = Field(min_length=1, max_length=64, pattern=r"^[\w .-]+$", examples=["gate"])
     pan_deg: float | None = Field(None, ge=-360, le=360, description="default: the mount's current angle")
     tilt_deg: float | None = Field(None, ge=-90, le=90, description="default: the mount's current angle")
 
 
 class Preset(BaseModel):
-    model_config = ConfigDict(from_attributes=True)
+    model_config = ConfigDict(from_attributes=True, json_schema_extra={"examples": [
+        {"id": 1, "name": "gate", "pan_deg": 12.5, "tilt_deg": -3.0, "created_at": 1795926283.882073}]})
 
     id: int
     name: str
@@ -202,7 +249,9 @@ class Preset(BaseModel):
 
 
 class TrackPointOut(BaseModel):
-    model_config = ConfigDict(from_attributes=True)
+    model_config = ConfigDict(from_attributes=True, json_schema_extra={"examples": [
+        {"t": 1795926279.683364, "x": -3.8115, "y": 0.508, "z": 7.2904, "r": 8.2423, "theta_deg": -27.6011,
+         "phi_deg": -3.5334}]})
 
     t: float
     x: float
@@ -214,7 +263,10 @@ class TrackPointOut(BaseModel):
 
 
 class TrackOut(BaseModel):
-    model_config = ConfigDict(from_attributes=True)
+    model_config = ConfigDict(from_attributes=True, json_schema_extra={"examples": [
+        {"id": 1, "run_id": "20261129T042435-500.0", "track_no": 1, "first_seen": 1795926279.683364,
+         "last_seen": 1795926286.523828, "detections": 203, "peak_speed_mps": 1.48, "width_m": 0.613,
+         "height_m": 1.702, "min_range_m": 7.2159, "replay_id": None}]})
 
     id: int
     run_id: str
@@ -231,6 +283,15 @@ class TrackOut(BaseModel):
 
 
 class TrackDetail(TrackOut):
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"id": 1, "run_id": "20261129T042435-500.0", "track_no": 1, "first_seen": 1795926279.683364,
+         "last_seen": 1795926286.523828, "detections": 203, "peak_speed_mps": 1.48, "width_m": 0.613,
+         "height_m": 1.702, "min_range_m": 7.2159, "replay_id": None, "trajectory": [
+            {"t": 1795926279.683364, "x": -3.8115, "y": 0.508, "z": 7.2904, "r": 8.2423, "theta_deg": -27.6011,
+         "phi_deg": -3.5334},
+            {"t": 1795926279.79087, "x": -3.7722, "y": 0.5913, "z": 7.2404, "r": 8.1855, "theta_deg": -27.5192,
+             "phi_deg": -4.1427}]}]})
+
     trajectory: list[TrackPointOut]
 
 
@@ -292,12 +353,20 @@ class TrackerSettings(Strict):
 class TrackerSettingsPatch(Strict):
     """Any subset of the settings; the rest keep their values."""
 
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"detector": {"epsilon": 14}, "aim": {"deadband_frac": 0.03}}]})
+
     detector: dict[str, Any] | None = Field(None, examples=[{"epsilon": 14}])
     tracks: dict[str, Any] | None = None
     aim: dict[str, Any] | None = None
 
 
 class CalibrationOut(BaseModel):
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"id": 3, "created_at": 1795926300.12, "created_by": 1, "status": "done", "board": "9x6", "square_m": 0.025,
+         "images": 13, "image_hashes": [["5f2b…e1", "9ac0…4d"]], "error": None, "finished_at": 1795926342.8,
+         "active": True, "report": None}]})
+
     id: int
     created_at: float
     created_by: int | None
@@ -313,19 +382,26 @@ class CalibrationOut(BaseModel):
 
 
 class UserIn(Strict):
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"username": "alice", "password": "correct horse battery", "role": "operator"}]})
+
     username: str = Field(min_length=1, max_length=64, pattern=r"^[A-Za-z0-9_.@-]+$", examples=["alice"])
     password: str = Field(min_length=12, max_length=128)
     role: Role
 
 
 class UserPatch(Strict):
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"role": "viewer"}, {"password": "a new long passphrase"}, {"disabled": True}]})
+
     password: str | None = Field(None, min_length=12, max_length=128)
     role: Role | None = None
     disabled: bool | None = None
 
 
 class UserOut(BaseModel):
-    model_config = ConfigDict(from_attributes=True)
+    model_config = ConfigDict(from_attributes=True, json_schema_extra={"examples": [
+        {"id": 2, "username": "alice", "role": "operator", "created_at": 1795926283.9370143, "disabled": False}]})
 
     id: int
     username: str
@@ -335,7 +411,9 @@ class UserOut(BaseModel):
 
 
 class AuditOut(BaseModel):
-    model_config = ConfigDict(from_attributes=True)
+    model_config = ConfigDict(from_attributes=True, json_schema_extra={"examples": [
+        {"id": 2, "at": 1795926283.8822331, "user_id": 1, "username": "admin", "address": "127.0.0.1",
+         "action": "preset.create", "target": "gate", "detail": {"pan_deg": 12.5, "tilt_deg": -3.0}}]})
 
     id: int
     at: float

@@ -21,7 +21,8 @@ NOT_FOUND: dict[int | str, dict[str, Any]] = {404: {"model": Message}}
 async def create(ctx: CtxDep, p: Admin, addr: Address, left: Annotated[list[UploadFile], File()],
                  right: Annotated[list[UploadFile], File()],
                  board: Annotated[str, Form(description="inner corners COLSxROWS", examples=["9x6"])],
-                 square: Annotated[float, Form(gt=0, le=10, description="square size (m)")]) -> dict[str, Any]:
+                 square: Annotated[float, Form(gt=0, le=10, description="square size (m)", examples=[0.025])]
+                 ) -> dict[str, Any]:
     lefts = [cal.Upload(f.filename or f"left{i}", await f.read()) for i, f in enumerate(left)]
     rights = [cal.Upload(f.filename or f"right{i}", await f.read()) for i, f in enumerate(right)]
     rec = await asyncio.to_thread(ctx.calibrations.upload, p.user, addr, board, square, lefts, rights)

@@ -8,7 +8,7 @@ from typing import Literal
 
 from fastapi import APIRouter, HTTPException, Request
 from fastapi.responses import StreamingResponse
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, ConfigDict, Field
 
 from server.deps import CtxDep, Viewer
 from server.schemas import Message
@@ -18,11 +18,17 @@ BOUNDARY = "tmeyeframe"
 
 
 class SessionDescription(BaseModel):
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"sdp": "v=0\r\no=- 4611731400430051336 2 IN IP4 127.0.0.1\r\ns=-\r\nt=0 0\r\n…", "type": "offer"}]})
+
     sdp: str = Field(min_length=10, max_length=100_000)
     type: Literal["offer", "answer"]
 
 
 class WebRTCConfig(BaseModel):
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"ice_servers": []}, {"ice_servers": ["stun:stun.example.org:3478"]}]})
+
     ice_servers: list[str]
 
 

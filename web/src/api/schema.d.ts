@@ -869,7 +869,12 @@ export interface paths {
 export type webhooks = Record<string, never>;
 export interface components {
     schemas: {
-        /** AckRequest */
+        /**
+         * AckRequest
+         * @example {
+         *       "comment": "gardener, expected"
+         *     }
+         */
         AckRequest: {
             /** Comment */
             comment?: string | null;
@@ -936,8 +941,20 @@ export interface components {
          * @example {
          *       "activated_at": 1795000000.1,
          *       "frame": 1234,
+         *       "history": [
+         *         {
+         *           "at": 1795000000.1,
+         *           "frame": 1234,
+         *           "id": 31,
+         *           "kind": "activated",
+         *           "state_from": "normal",
+         *           "state_to": "unack",
+         *           "target_id": 3
+         *         }
+         *       ],
          *       "id": 7,
          *       "name": "Gate zone",
+         *       "playback_url": "#/playback?t=1794999990.100&alarm=7",
          *       "priority": "critical",
          *       "rule_id": 1,
          *       "rule_key": "rule:1",
@@ -945,6 +962,7 @@ export interface components {
          *       "shelved_one_shot": false,
          *       "state": "unack",
          *       "target_id": 3,
+         *       "track_id": 12,
          *       "updated_at": 1795000000.1
          *     }
          */
@@ -1019,7 +1037,18 @@ export interface components {
              */
             playback_url: string;
         };
-        /** AlarmEventOut */
+        /**
+         * AlarmEventOut
+         * @example {
+         *       "at": 1795000000.1,
+         *       "frame": 1234,
+         *       "id": 31,
+         *       "kind": "activated",
+         *       "state_from": "normal",
+         *       "state_to": "unack",
+         *       "target_id": 3
+         *     }
+         */
         AlarmEventOut: {
             /** Id */
             id: number;
@@ -1172,7 +1201,31 @@ export interface components {
              */
             out_of_service: boolean;
         };
-        /** AlarmRuleOut */
+        /**
+         * AlarmRuleOut
+         * @example {
+         *       "built_in": false,
+         *       "condition": {
+         *         "dwell_s": 2,
+         *         "kind": "zone",
+         *         "shape": "box",
+         *         "x_max": 2,
+         *         "x_min": -2,
+         *         "z_max": 12,
+         *         "z_min": 5
+         *       },
+         *       "created_at": 1795000000.1,
+         *       "enabled": true,
+         *       "id": 1,
+         *       "name": "Gate zone",
+         *       "off_delay_s": 2,
+         *       "on_delay_s": 0.5,
+         *       "out_of_service": false,
+         *       "priority": "critical",
+         *       "state": "normal",
+         *       "updated_at": 1795000000.1
+         *     }
+         */
         AlarmRuleOut: {
             /** Id */
             id: number;
@@ -1210,7 +1263,16 @@ export interface components {
              */
             state: ("unack" | "ack" | "rtn_unack" | "shelved" | "suppressed" | "out_of_service" | "normal") | null;
         };
-        /** AlarmRulePatch */
+        /**
+         * AlarmRulePatch
+         * @example {
+         *       "on_delay_s": 1,
+         *       "priority": "high"
+         *     }
+         * @example {
+         *       "enabled": false
+         *     }
+         */
         AlarmRulePatch: {
             /** Name */
             name?: string | null;
@@ -1230,7 +1292,27 @@ export interface components {
              */
             out_of_service?: boolean | null;
         };
-        /** AlarmSummary */
+        /**
+         * AlarmSummary
+         * @example {
+         *       "flood": false,
+         *       "flooded_operators": [],
+         *       "new_in_window": 3,
+         *       "open": {
+         *         "critical": 1,
+         *         "high": 0,
+         *         "low": 0,
+         *         "medium": 2
+         *       },
+         *       "unacknowledged": {
+         *         "critical": 1,
+         *         "high": 0,
+         *         "low": 0,
+         *         "medium": 1
+         *       },
+         *       "window_s": 600
+         *     }
+         */
         AlarmSummary: {
             /**
              * Open
@@ -1265,6 +1347,12 @@ export interface components {
          * ApproachCondition
          * @description Closing speed −dr/dt of the primary target (from the predictor) above speed_mps for for_s; it stays
          *     true until the speed falls under speed_mps − deadband_mps (ISA-18.2 deadband, against chattering).
+         * @example {
+         *       "deadband_mps": 0.3,
+         *       "for_s": 1,
+         *       "kind": "approach",
+         *       "speed_mps": 1.5
+         *     }
          */
         ApproachCondition: {
             /**
@@ -1285,7 +1373,22 @@ export interface components {
              */
             deadband_mps: number;
         };
-        /** AuditOut */
+        /**
+         * AuditOut
+         * @example {
+         *       "action": "preset.create",
+         *       "address": "127.0.0.1",
+         *       "at": 1795926283.8822331,
+         *       "detail": {
+         *         "pan_deg": 12.5,
+         *         "tilt_deg": -3
+         *       },
+         *       "id": 2,
+         *       "target": "gate",
+         *       "user_id": 1,
+         *       "username": "admin"
+         *     }
+         */
         AuditOut: {
             /** Id */
             id: number;
@@ -1321,6 +1424,7 @@ export interface components {
             /**
              * Square
              * @description square size (m)
+             * @example 0.025
              */
             square: number;
         };
@@ -1361,7 +1465,16 @@ export interface components {
             /** Note */
             note: string;
         };
-        /** BookmarkOut */
+        /**
+         * BookmarkOut
+         * @example {
+         *       "created_at": 1795000100,
+         *       "created_by": 2,
+         *       "id": 4,
+         *       "note": "van at the gate",
+         *       "t": 1795000012.4
+         *     }
+         */
         BookmarkOut: {
             /** Id */
             id: number;
@@ -1374,7 +1487,26 @@ export interface components {
             /** Created By */
             created_by: number | null;
         };
-        /** CalibrationOut */
+        /**
+         * CalibrationOut
+         * @example {
+         *       "active": true,
+         *       "board": "9x6",
+         *       "created_at": 1795926300.12,
+         *       "created_by": 1,
+         *       "finished_at": 1795926342.8,
+         *       "id": 3,
+         *       "image_hashes": [
+         *         [
+         *           "5f2b…e1",
+         *           "9ac0…4d"
+         *         ]
+         *       ],
+         *       "images": 13,
+         *       "square_m": 0.025,
+         *       "status": "done"
+         *     }
+         */
         CalibrationOut: {
             /** Id */
             id: number;
@@ -1415,7 +1547,37 @@ export interface components {
                 [key: string]: unknown;
             } | null;
         };
-        /** Detection */
+        /**
+         * Detection
+         * @example {
+         *       "area_px": 5618,
+         *       "box": [
+         *         286,
+         *         162,
+         *         386,
+         *         318
+         *       ],
+         *       "centroid": [
+         *         336.09,
+         *         238.26
+         *       ],
+         *       "disparity_px": 23.972,
+         *       "phi_deg": -4.9581,
+         *       "r": 7.46,
+         *       "sigma_phi_deg": 0.15651,
+         *       "sigma_r": 0.0073,
+         *       "sigma_theta_deg": 0.10173,
+         *       "size_m": [
+         *         0.651,
+         *         1.714
+         *       ],
+         *       "theta_deg": -0.7257,
+         *       "track_id": 1,
+         *       "x": -0.0941,
+         *       "y": 0.6447,
+         *       "z": 7.4315
+         *     }
+         */
         Detection: {
             /** Track Id */
             track_id: number;
@@ -1527,7 +1689,23 @@ export interface components {
              */
             cameras: ("left" | "right")[];
         };
-        /** ExportOut */
+        /**
+         * ExportOut
+         * @example {
+         *       "bytes": 7340032,
+         *       "cameras": [
+         *         "left",
+         *         "right"
+         *       ],
+         *       "created_at": 1795000100,
+         *       "end": 1795000060,
+         *       "finished_at": 1795000104.2,
+         *       "id": 5,
+         *       "progress": 1,
+         *       "start": 1795000000,
+         *       "status": "done"
+         *     }
+         */
         ExportOut: {
             /** Id */
             id: number;
@@ -1556,7 +1734,13 @@ export interface components {
             /** Finished At */
             finished_at: number | null;
         };
-        /** Fault */
+        /**
+         * Fault
+         * @example {
+         *       "kind": "source",
+         *       "message": "no frame from the cameras for 1.2 s"
+         *     }
+         */
         Fault: {
             /** Kind */
             kind: string;
@@ -1661,7 +1845,19 @@ export interface components {
              */
             note: string;
         };
-        /** LockOut */
+        /**
+         * LockOut
+         * @example {
+         *       "alarm_id": 7,
+         *       "created_at": 1795000100,
+         *       "created_by": 2,
+         *       "end": 1795000060,
+         *       "id": 2,
+         *       "note": "incident 2026-114",
+         *       "start": 1795000000,
+         *       "track_id": 12
+         *     }
+         */
         LockOut: {
             /** Id */
             id: number;
@@ -1680,7 +1876,16 @@ export interface components {
             /** Created By */
             created_by: number | null;
         };
-        /** LoginAnswer */
+        /**
+         * LoginAnswer
+         * @example {
+         *       "access_token": "v1.SDfTtjnDHo0WuNra9dhmZ4yLiFoqs5lT.1795969483.Pt7M9g37pSTDFSAz7Z70jLSrnIZ-LkEt3P3BTzE0Uc0",
+         *       "csrf_token": "DgZmrHayYoo7-ZcUQ-vkkNNLJV4Ole2hZTvpCjbmdFY",
+         *       "expires_in": 43200,
+         *       "role": "operator",
+         *       "token_type": "bearer"
+         *     }
+         */
         LoginAnswer: {
             /** Access Token */
             access_token: string;
@@ -1710,6 +1915,10 @@ export interface components {
          * LostCondition
          * @description The primary target not seen for longer than after_s. Suppressed by design while the mount is not in
          *     auto mode (manual, hold or home: the operator points it).
+         * @example {
+         *       "after_s": 5,
+         *       "kind": "lost"
+         *     }
          */
         LostCondition: {
             /**
@@ -1720,7 +1929,13 @@ export interface components {
             /** After S */
             after_s: number;
         };
-        /** Me */
+        /**
+         * Me
+         * @example {
+         *       "role": "operator",
+         *       "username": "alice"
+         *     }
+         */
         Me: {
             /** Username */
             username: string;
@@ -1730,7 +1945,12 @@ export interface components {
              */
             role: "viewer" | "operator" | "admin";
         };
-        /** Message */
+        /**
+         * Message
+         * @example {
+         *       "detail": "no preset with id 99"
+         *     }
+         */
         Message: {
             /** Detail */
             detail: string;
@@ -1743,7 +1963,15 @@ export interface components {
              */
             mode: "auto" | "manual" | "hold" | "home";
         };
-        /** Percentiles */
+        /**
+         * Percentiles
+         * @example {
+         *       "max": 10.617,
+         *       "n": 9027,
+         *       "p50": 4.61,
+         *       "p99": 8.767
+         *     }
+         */
         Percentiles: {
             /** N */
             n: number;
@@ -1775,7 +2003,16 @@ export interface components {
              */
             v: number;
         };
-        /** Preset */
+        /**
+         * Preset
+         * @example {
+         *       "created_at": 1795926283.882073,
+         *       "id": 1,
+         *       "name": "gate",
+         *       "pan_deg": 12.5,
+         *       "tilt_deg": -3
+         *     }
+         */
         Preset: {
             /** Id */
             id: number;
@@ -1788,7 +2025,17 @@ export interface components {
             /** Created At */
             created_at: number;
         };
-        /** PresetIn */
+        /**
+         * PresetIn
+         * @example {
+         *       "name": "gate",
+         *       "pan_deg": 12.5,
+         *       "tilt_deg": -3
+         *     }
+         * @example {
+         *       "name": "here"
+         *     }
+         */
         PresetIn: {
             /**
              * Name
@@ -1806,7 +2053,13 @@ export interface components {
              */
             tilt_deg?: number | null;
         };
-        /** RangeBelowCondition */
+        /**
+         * RangeBelowCondition
+         * @example {
+         *       "distance_m": 8,
+         *       "kind": "range_below"
+         *     }
+         */
         RangeBelowCondition: {
             /**
              * @description discriminator enum property added by openapi-typescript
@@ -1816,7 +2069,23 @@ export interface components {
             /** Distance M */
             distance_m: number;
         };
-        /** RecordingStatus */
+        /**
+         * RecordingStatus
+         * @example {
+         *       "bytes": 1843200,
+         *       "dropped_packets": 0,
+         *       "errors": 0,
+         *       "frames": {
+         *         "left": 240,
+         *         "right": 240
+         *       },
+         *       "mode": "continuous",
+         *       "segments": 12,
+         *       "state": "recording",
+         *       "telemetry_missing": 0,
+         *       "telemetry_rows": 249
+         *     }
+         */
         RecordingStatus: {
             /**
              * Mode
@@ -1883,7 +2152,35 @@ export interface components {
              */
             calibration_id?: number | null;
         };
-        /** ReplayOut */
+        /**
+         * ReplayOut
+         * @example {
+         *       "agreement": {
+         *         "both_detected": 861,
+         *         "frames": 900,
+         *         "range_diff_median_m": 0.0031,
+         *         "range_diff_p95_m": 0.0412,
+         *         "same_count": 0.9911,
+         *         "same_detected": 0.9922
+         *       },
+         *       "created_at": 1795000100,
+         *       "end": 1795000030,
+         *       "finished_at": 1795000131.5,
+         *       "frames": 900,
+         *       "id": 3,
+         *       "progress": 1,
+         *       "settings": {
+         *         "background": "simulated scene endless",
+         *         "rig": "live",
+         *         "scenario": "endless",
+         *         "seed": 0,
+         *         "targets": "auto",
+         *         "threshold": 14
+         *       },
+         *       "start": 1795000000,
+         *       "status": "done"
+         *     }
+         */
         ReplayOut: {
             /** Id */
             id: number;
@@ -2041,7 +2338,13 @@ export interface components {
                 [key: string]: number[];
             } | null;
         };
-        /** SessionDescription */
+        /**
+         * SessionDescription
+         * @example {
+         *       "sdp": "v=0\r\no=- 4611731400430051336 2 IN IP4 127.0.0.1\r\ns=-\r\nt=0 0\r\n…",
+         *       "type": "offer"
+         *     }
+         */
         SessionDescription: {
             /** Sdp */
             sdp: string;
@@ -2051,7 +2354,17 @@ export interface components {
              */
             type: "offer" | "answer";
         };
-        /** ShelveRequest */
+        /**
+         * ShelveRequest
+         * @example {
+         *       "minutes": 30,
+         *       "reason": "maintenance at the gate"
+         *     }
+         * @example {
+         *       "one_shot": true,
+         *       "reason": "known visitor"
+         *     }
+         */
         ShelveRequest: {
             /**
              * Minutes
@@ -2070,6 +2383,11 @@ export interface components {
         /**
          * SizeCondition
          * @description A target whose metric width and height (m, from its disparity) lie inside the bounds.
+         * @example {
+         *       "height_max": 2.5,
+         *       "kind": "size",
+         *       "width_min": 1.5
+         *     }
          */
         SizeCondition: {
             /**
@@ -2092,7 +2410,95 @@ export interface components {
             /** Height Max */
             height_max?: number | null;
         };
-        /** Status */
+        /**
+         * Status
+         * @example {
+         *       "deferred_boxes": 179,
+         *       "event_loop_lag_ms": {
+         *         "max": 5.03,
+         *         "n": 600,
+         *         "p50": 0.641,
+         *         "p99": 2.772
+         *       },
+         *       "faults": [],
+         *       "fps": 30.01,
+         *       "frame": 250,
+         *       "frame_errors": 0,
+         *       "frame_gap_max_ms": 41.2,
+         *       "frames_processed": 250,
+         *       "recording": {
+         *         "bytes": 1843200,
+         *         "dropped_packets": 0,
+         *         "errors": 0,
+         *         "frames": {
+         *           "left": 240,
+         *           "right": 240
+         *         },
+         *         "mode": "continuous",
+         *         "segments": 12,
+         *         "state": "recording",
+         *         "telemetry_missing": 0,
+         *         "telemetry_rows": 249
+         *       },
+         *       "reused_sigma": 121,
+         *       "servo": {
+         *         "configured": true,
+         *         "limits": {
+         *           "pan_deg": [
+         *             -170,
+         *             170
+         *           ],
+         *           "tilt_deg": [
+         *             -30,
+         *             80
+         *           ]
+         *         },
+         *         "mode": "auto",
+         *         "pan_deg": -20.376,
+         *         "tilt_deg": -4.7281
+         *       },
+         *       "skipped_frames": 0,
+         *       "source": {
+         *         "fps": 30,
+         *         "height": 480,
+         *         "hfov_deg": 57.697,
+         *         "kind": "sim",
+         *         "scenario": "endless",
+         *         "seed": 0,
+         *         "vfov_deg": 44.307,
+         *         "width": 640
+         *       },
+         *       "source_faults": 0,
+         *       "state": "running",
+         *       "subscribers": 4,
+         *       "subscriptions": [
+         *         {
+         *           "delivered": 250,
+         *           "dropped": 0,
+         *           "name": "media",
+         *           "queued": 0
+         *         },
+         *         {
+         *           "delivered": 241,
+         *           "dropped": 0,
+         *           "name": "track-writer",
+         *           "queued": 9
+         *         }
+         *       ],
+         *       "ws_delivery_ms": {
+         *         "max": 2.88,
+         *         "n": 9027,
+         *         "p50": 0.882,
+         *         "p99": 1.956
+         *       },
+         *       "ws_send_latency_ms": {
+         *         "max": 10.617,
+         *         "n": 9027,
+         *         "p50": 4.61,
+         *         "p99": 8.767
+         *       }
+         *     }
+         */
         Status: {
             /** State */
             state: string;
@@ -2154,7 +2560,15 @@ export interface components {
             /** @description the recorder; `recording.fault` is set (and a fault of kind recording listed) when recording stopped on a fault */
             recording?: components["schemas"]["RecordingStatus"] | null;
         };
-        /** Subscription */
+        /**
+         * Subscription
+         * @example {
+         *       "delivered": 235,
+         *       "dropped": 0,
+         *       "name": "track-writer",
+         *       "queued": 9
+         *     }
+         */
         Subscription: {
             /** Name */
             name: string;
@@ -2271,7 +2685,41 @@ export interface components {
              */
             detections: components["schemas"]["Detection"][];
         };
-        /** TrackDetail */
+        /**
+         * TrackDetail
+         * @example {
+         *       "detections": 203,
+         *       "first_seen": 1795926279.683364,
+         *       "height_m": 1.702,
+         *       "id": 1,
+         *       "last_seen": 1795926286.523828,
+         *       "min_range_m": 7.2159,
+         *       "peak_speed_mps": 1.48,
+         *       "run_id": "20261129T042435-500.0",
+         *       "track_no": 1,
+         *       "trajectory": [
+         *         {
+         *           "phi_deg": -3.5334,
+         *           "r": 8.2423,
+         *           "t": 1795926279.683364,
+         *           "theta_deg": -27.6011,
+         *           "x": -3.8115,
+         *           "y": 0.508,
+         *           "z": 7.2904
+         *         },
+         *         {
+         *           "phi_deg": -4.1427,
+         *           "r": 8.1855,
+         *           "t": 1795926279.79087,
+         *           "theta_deg": -27.5192,
+         *           "x": -3.7722,
+         *           "y": 0.5913,
+         *           "z": 7.2404
+         *         }
+         *       ],
+         *       "width_m": 0.613
+         *     }
+         */
         TrackDetail: {
             /** Id */
             id: number;
@@ -2304,7 +2752,21 @@ export interface components {
             /** Trajectory */
             trajectory: components["schemas"]["TrackPointOut"][];
         };
-        /** TrackOut */
+        /**
+         * TrackOut
+         * @example {
+         *       "detections": 203,
+         *       "first_seen": 1795926279.683364,
+         *       "height_m": 1.702,
+         *       "id": 1,
+         *       "last_seen": 1795926286.523828,
+         *       "min_range_m": 7.2159,
+         *       "peak_speed_mps": 1.48,
+         *       "run_id": "20261129T042435-500.0",
+         *       "track_no": 1,
+         *       "width_m": 0.613
+         *     }
+         */
         TrackOut: {
             /** Id */
             id: number;
@@ -2335,7 +2797,18 @@ export interface components {
              */
             replay_id?: number | null;
         };
-        /** TrackPointOut */
+        /**
+         * TrackPointOut
+         * @example {
+         *       "phi_deg": -3.5334,
+         *       "r": 8.2423,
+         *       "t": 1795926279.683364,
+         *       "theta_deg": -27.6011,
+         *       "x": -3.8115,
+         *       "y": 0.508,
+         *       "z": 7.2904
+         *     }
+         */
         TrackPointOut: {
             /** T */
             t: number;
@@ -2361,6 +2834,14 @@ export interface components {
         /**
          * TrackerSettingsPatch
          * @description Any subset of the settings; the rest keep their values.
+         * @example {
+         *       "aim": {
+         *         "deadband_frac": 0.03
+         *       },
+         *       "detector": {
+         *         "epsilon": 14
+         *       }
+         *     }
          */
         TrackerSettingsPatch: {
             /**
@@ -2408,7 +2889,14 @@ export interface components {
              */
             max_missed: number;
         };
-        /** UserIn */
+        /**
+         * UserIn
+         * @example {
+         *       "password": "correct horse battery",
+         *       "role": "operator",
+         *       "username": "alice"
+         *     }
+         */
         UserIn: {
             /**
              * Username
@@ -2423,7 +2911,16 @@ export interface components {
              */
             role: "viewer" | "operator" | "admin";
         };
-        /** UserOut */
+        /**
+         * UserOut
+         * @example {
+         *       "created_at": 1795926283.9370143,
+         *       "disabled": false,
+         *       "id": 2,
+         *       "role": "operator",
+         *       "username": "alice"
+         *     }
+         */
         UserOut: {
             /** Id */
             id: number;
@@ -2439,7 +2936,18 @@ export interface components {
             /** Disabled */
             disabled: boolean;
         };
-        /** UserPatch */
+        /**
+         * UserPatch
+         * @example {
+         *       "role": "viewer"
+         *     }
+         * @example {
+         *       "password": "a new long passphrase"
+         *     }
+         * @example {
+         *       "disabled": true
+         *     }
+         */
         UserPatch: {
             /** Password */
             password?: string | null;
@@ -2448,7 +2956,17 @@ export interface components {
             /** Disabled */
             disabled?: boolean | null;
         };
-        /** WebRTCConfig */
+        /**
+         * WebRTCConfig
+         * @example {
+         *       "ice_servers": []
+         *     }
+         * @example {
+         *       "ice_servers": [
+         *         "stun:stun.example.org:3478"
+         *       ]
+         *     }
+         */
         WebRTCConfig: {
             /** Ice Servers */
             ice_servers: string[];
@@ -2458,6 +2976,22 @@ export interface components {
          * @description A target inside a box (x, y, z min and max) or a vertical cylinder (centre_x, centre_z, radius,
          *     optional y_min / y_max), in the telemetry's frame (x right, y down, z forward, m); dwell_s: how long
          *     it must stay inside.
+         * @example {
+         *       "dwell_s": 2,
+         *       "kind": "zone",
+         *       "shape": "box",
+         *       "x_max": 2,
+         *       "x_min": -2,
+         *       "z_max": 12,
+         *       "z_min": 5
+         *     }
+         * @example {
+         *       "center_x": 0,
+         *       "center_z": 10,
+         *       "kind": "zone",
+         *       "radius": 3,
+         *       "shape": "cylinder"
+         *     }
          */
         ZoneCondition: {
             /**
