@@ -18,6 +18,7 @@ from server.db.models import ServoPreset, SettingsChange, User
 from server.services import audit
 from server.services.errors import Conflict, Invalid, NotFound
 from tmeye.runtime import NoServoError, Runtime, ServoMode, ServoRequestError, TrackerTuning
+from tmeye.runtime.servo import ServoWish
 
 T = TypeVar("T")
 REQUEST_TIMEOUT_S = 2.0
@@ -77,21 +78,24 @@ def _commit_or_undo(db: Session, undo: Callable[[], Future[Any]]) -> None:
         raise
 
 
-def set_mode(db: Session, rt: Runtime, user: User, address: str, mode: str) -> dict[str, Any]:
-    audit.record(db, user, address, "servo.mode", mode)
+def _servo_action(db: Session, rt: Runtime, request: Callable[[], Future[ServoWish]]) -> dict[str, Any]:
+    """A servo request whose audit record the session holds: written first, the request made, committed
+    (or the request undone); the servo's state after it."""
     _written_first(db)
-    before = wait(rt.servo_mode(ServoMode(mode)))
+    before = wait(request())
     _commit_or_undo(db, lambda: rt.servo_restore(before))
     return servo_state(rt)
+
+
+def set_mode(db: Session, rt: Runtime, user: User, address: str, mode: str) -> dict[str, Any]:
+    audit.record(db, user, address, "servo.mode", mode)
+    return _servo_action(db, rt, lambda: rt.servo_mode(ServoMode(mode)))
 
 
 def goto(db: Session, rt: Runtime, user: User, address: str, pan_deg: float, tilt_deg: float,
          action: str = "servo.goto", target: str | None = None) -> dict[str, Any]:
     audit.record(db, user, address, action, target, {"pan_deg": pan_deg, "tilt_deg": tilt_deg})
-    _written_first(db)
-    before = wait(rt.servo_goto(pan_deg, tilt_deg))
-    _commit_or_undo(db, lambda: rt.servo_restore(before))
-    return servo_state(rt)
+    return _servo_action(db, rt, lambda: rt.servo_goto(pan_deg, tilt_deg))
 
 
 def point(db: Session, rt: Runtime, user: User, address: str, camera: str, u: float, v: float) -> dict[str, Any]:
@@ -115,10 +119,7 @@ def jog(db: Session, rt: Runtime, user: User, address: str, pan_dps: float, tilt
         duration_s: float) -> dict[str, Any]:
     audit.record(db, user, address, "servo.jog", None,
                  {"pan_dps": pan_dps, "tilt_dps": tilt_dps, "duration_s": duration_s})
-    _written_first(db)
-    before = wait(rt.servo_jog(pan_dps, tilt_dps, duration_s))
-    _commit_or_undo(db, lambda: rt.servo_restore(before))
-    return servo_state(rt)
+    return _servo_action(db, rt, lambda: rt.servo_jog(pan_dps, tilt_dps, duration_s))
 
 
 def list_presets(db: Session) -> list[ServoPreset]:
