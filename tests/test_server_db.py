@@ -69,3 +69,31 @@ def test_sigkill_while_writing_tracks_leaves_a_sound_database(tmp_path: Path) ->
     con = sqlite3.connect(data / "tmeye.db")
     assert con.execute("PRAGMA integrity_check").fetchone()[0] == "ok"
     assert con.execute("SELECT count(*) FROM track_points").fetchone()[0] >= n_before
+
+
+def test_sigint_stops_the_server_with_everything_flushed(tmp_path: Path) -> None:
+    """Ctrl-C (SIGINT) stops `tmeye serve` as SIGTERM does: the application shuts down (then uvicorn exits
+    with the signal's conventional status, 130), the tracks the API showed are stored with at least the
+    detections it showed, no recording segment is left open, the database is sound."""
+    data = tmp_path / "data"
+    server = start_server(data, "--scenario", "walk", "--servo", "none")
+    tok = server.login()
+    deadline = time.monotonic() + 30
+    shown: list[dict[str, object]] = []
+    while time.monotonic() < deadline:
+        shown = httpx.get(f"{server.url}/api/tracks", headers={"Authorization": f"Bearer {tok}"}).json()
+        if shown and int(str(shown[0]["detections"])) > 30:
+            break
+        time.sleep(0.3)
+    assert shown, "no tracks were being written"
+    assert server.stop(signal.SIGINT, timeout=30.0) in (0, 128 + signal.SIGINT)
+    log = server.log_text()
+    assert "Traceback" not in log and "tmeye.server: stopped" in log and "Application shutdown complete" in log
+    con = sqlite3.connect(data / "tmeye.db")
+    try:
+        assert con.execute("PRAGMA integrity_check").fetchone()[0] == "ok"
+        stored = dict(con.execute("SELECT id, detections FROM tracks").fetchall())
+        assert all(stored[int(str(t["id"]))] >= int(str(t["detections"])) for t in shown)
+        assert con.execute("SELECT count(*) FROM segments WHERE status = 'open'").fetchone()[0] == 0
+    finally:
+        con.close()
