@@ -20,7 +20,7 @@ def _pair(z_m: float, extent_px: tuple[float, float]):  # type: ignore[no-untype
     d = rect.f * rect.rig.baseline / z_m
     args = (np.array([x, y]), d, 0.05, 400, None, (0.0, 0.0), extent_px)
     flat = Localizer(rect).locate(*args)
-    solid = Localizer(rect, solid=SolidPrior(0.5, 0.3)).locate(*args)
+    solid = Localizer(rect, solid=SolidPrior(0.5, 0.3, rim_sigma_px=0.0)).locate(*args)
     return flat, solid, rect
 
 
@@ -41,6 +41,20 @@ def test_the_centre_lies_behind_the_face_by_half_the_assumed_depth() -> None:
     o = solid.rig / np.linalg.norm(solid.rig)
     across = 0.15 * e * float(np.linalg.norm(np.cross(u, o))) / float(np.linalg.norm(solid.rig))
     assert math.isclose(solid.sigma_theta ** 2, flat.sigma_theta ** 2 + across ** 2, rel_tol=0.1)
+
+
+def test_a_solid_bodys_rim_widens_the_centroids_sigma_by_a_side_over_root_two() -> None:
+    # each side of the outline off by rim_sigma_px (1-σ), independently: eq. (10)'s centroid off by half of
+    # each side's shift, so by rim_sigma_px / √2 along x and y, as if that were seen-in-part's extra_px
+    rect = Rectifier(default_rig())
+    base = (np.array([380.0, 200.0]), 12.0, 0.05, 400, None)
+    rim = Localizer(rect, solid=SolidPrior(rim_sigma_px=0.5)).locate(*base, (0.0, 0.0), (40.0, 120.0))
+    s = 0.5 / math.sqrt(2.0)
+    same = Localizer(rect, solid=SolidPrior(rim_sigma_px=0.0)).locate(*base, (s, s), (40.0, 120.0))
+    assert np.allclose(rim.world, same.world) and np.allclose(rim.cov_world, same.cov_world, rtol=1e-12, atol=0.0)
+    sharp = Localizer(rect, solid=SolidPrior(rim_sigma_px=0.0)).locate(*base, (0.0, 0.0), (40.0, 120.0))
+    assert rim.sigma_theta > 1.5 * sharp.sigma_theta and rim.sigma_phi > 1.5 * sharp.sigma_phi
+    assert math.isclose(rim.sigma_r, sharp.sigma_r, rel_tol=0.01)  # the range hardly moves with the centroid
 
 
 def test_the_smaller_extent_counts_and_no_extent_or_prior_changes_nothing() -> None:
