@@ -20,7 +20,7 @@ def _pair(z_m: float, extent_px: tuple[float, float]):  # type: ignore[no-untype
     d = rect.f * rect.rig.baseline / z_m
     args = (np.array([x, y]), d, 0.05, 400, None, (0.0, 0.0), extent_px)
     flat = Localizer(rect).locate(*args)
-    solid = Localizer(rect, solid=SolidPrior(0.5, 0.3, rim_sigma_px=0.0)).locate(*args)
+    solid = Localizer(rect, solid=SolidPrior(0.5, 0.3, rim_sigma_px=0.0, upright_sigma=0.0)).locate(*args)
     return flat, solid, rect
 
 
@@ -48,13 +48,39 @@ def test_a_solid_bodys_rim_widens_the_centroids_sigma_by_a_side_over_root_two() 
     # each side's shift, so by rim_sigma_px / √2 along x and y, as if that were seen-in-part's extra_px
     rect = Rectifier(default_rig())
     base = (np.array([380.0, 200.0]), 12.0, 0.05, 400, None)
-    rim = Localizer(rect, solid=SolidPrior(rim_sigma_px=0.5)).locate(*base, (0.0, 0.0), (40.0, 120.0))
+
+    def loc(rim_px: float, extra: tuple[float, float]):  # type: ignore[no-untyped-def]
+        prior = SolidPrior(rim_sigma_px=rim_px, upright_sigma=0.0)
+        return Localizer(rect, solid=prior).locate(*base, extra, (40.0, 120.0))
+
+    rim = loc(0.5, (0.0, 0.0))
     s = 0.5 / math.sqrt(2.0)
-    same = Localizer(rect, solid=SolidPrior(rim_sigma_px=0.0)).locate(*base, (s, s), (40.0, 120.0))
+    same = loc(0.0, (s, s))
     assert np.allclose(rim.world, same.world) and np.allclose(rim.cov_world, same.cov_world, rtol=1e-12, atol=0.0)
-    sharp = Localizer(rect, solid=SolidPrior(rim_sigma_px=0.0)).locate(*base, (0.0, 0.0), (40.0, 120.0))
+    sharp = loc(0.0, (0.0, 0.0))
     assert rim.sigma_theta > 1.5 * sharp.sigma_theta and rim.sigma_phi > 1.5 * sharp.sigma_phi
     assert math.isclose(rim.sigma_r, sharp.sigma_r, rel_tol=0.01)  # the range hardly moves with the centroid
+
+
+def test_an_upright_bodys_elevation_sigma_is_at_least_a_share_of_its_height() -> None:
+    # a person (height >= 1.5 x width): y's further 1-σ is max(upright_sigma * h, the seen-in-part extra_px);
+    # a ball or a car side-on (not upright) keeps its own
+    rect = Rectifier(default_rig())
+    base = (np.array([380.0, 200.0]), 12.0, 0.05, 400, None)
+    solid = SolidPrior(rim_sigma_px=0.0, upright_sigma=0.03)
+    bare = SolidPrior(rim_sigma_px=0.0, upright_sigma=0.0)
+
+    def loc(prior: SolidPrior, extra: tuple[float, float], extent: tuple[float, float]):  # type: ignore[no-untyped-def]
+        return Localizer(rect, solid=prior).locate(*base, extra, extent)
+
+    person = loc(solid, (0.0, 0.0), (40.0, 120.0))
+    assert np.allclose(person.cov_world, loc(bare, (0.0, 3.6), (40.0, 120.0)).cov_world, rtol=1e-12, atol=0.0)
+    assert person.sigma_phi > 5.0 * loc(bare, (0.0, 0.0), (40.0, 120.0)).sigma_phi
+    hidden = loc(solid, (0.0, 10.0), (40.0, 120.0))  # its legs hidden: the larger term counts, not both
+    assert np.allclose(hidden.cov_world, loc(bare, (0.0, 10.0), (40.0, 120.0)).cov_world, rtol=1e-12, atol=0.0)
+    for extent in ((60.0, 60.0), (150.0, 55.0)):  # a ball, a car
+        assert np.allclose(loc(solid, (0.0, 0.0), extent).cov_world, loc(bare, (0.0, 0.0), extent).cov_world,
+                           rtol=1e-12, atol=0.0)
 
 
 def test_the_smaller_extent_counts_and_no_extent_or_prior_changes_nothing() -> None:
