@@ -28,6 +28,28 @@ def test_eval_json_on_a_short_run() -> None:
     assert out.returncode == 0, out.stderr
     rep = json.loads(out.stdout)
     assert rep["frames"] == 20 and rep["false_target_frames"] == 0 and rep["detection_rate"] > 0.9
+    assert rep["scenario"] == "walk:body" and rep["wide_frames"] > 0  # solid bodies are the default
+
+
+def test_eval_plates_on_request() -> None:
+    out = tmeye("eval", "--scenario", "walk:plate", "--frames", "5", "--json")
+    assert out.returncode == 0, out.stderr
+    rep = json.loads(out.stdout)
+    assert rep["scenario"] == "walk:plate" and "wide_frames" not in rep and rep["pixel_f1"] > 0.99
+
+
+def test_eval_all_runs_every_scenario_both_ways_and_checks_each() -> None:
+    out = tmeye("eval", "--all", "--frames", "2", "--json", timeout=600)
+    assert out.returncode == 0, out.stderr
+    res = json.loads(out.stdout)
+    names = list(res["scenarios"])
+    bases = ["walk", "illumination", "foliage", "approach", "two-targets", "pan", "occlusion", "manoeuvre", "endless"]
+    assert names == [b + ":body" for b in bases] + [b + ":plate" for b in bases]
+    assert all(res["scenarios"][n]["scenario"] == n and res["scenarios"][n]["frames"] == 2 for n in names)
+    assert "detection_rate >= 0.99" in res["checks"]["walk:body"]
+    assert "detection_rate >= 0.99" not in res["checks"]["walk:plate"]
+    flat = [v for c in res["checks"].values() for v in c.values()]
+    assert (res["met"], res["missed"], res["no_frames"]) == (flat.count(True), flat.count(False), flat.count(None))
 
 
 def test_track_prints_one_json_line_per_frame() -> None:
@@ -46,6 +68,8 @@ def test_track_prints_one_json_line_per_frame() -> None:
         (("eval", "--scenario", "nope"), "unknown scenario 'nope'"),
         (("eval", "--scenario", "walk", "--frames", "0"), "--frames must be at least 1"),
         (("eval",), "give --scenario"),
+        (("eval", "--scenario", "nope:plate"), "unknown scenario 'nope:plate'"),
+        (("eval", "--all", "--scenario", "walk"), "--all runs every scenario"),
         (("bench", "--size", "big"), "--size must look like 640x480"),
         (("bench", "--size", "10x10"), "out of range"),
         (("bench", "--scenario", "nope"), "unknown scenario 'nope'"),

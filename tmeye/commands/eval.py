@@ -16,7 +16,10 @@ SPECIAL = {
 
 def register(subparsers: Any) -> None:
     p = subparsers.add_parser("eval", help="measure accuracy on a simulated scenario")
-    p.add_argument("--scenario", help="scenario name (see --list); NAME:body draws its targets as solid bodies")
+    p.add_argument("--scenario", help="scenario name (see --list): its targets are solid bodies; NAME:plate draws "
+                   "them as flat plates")
+    p.add_argument("--all", action="store_true", help="every scenario, as bodies and as plates, each checked "
+                   "against the acceptance lines (with --frames, --seed, --json)")
     p.add_argument("--list", action="store_true", help="list the scenarios and exit")
     p.add_argument("--frames", type=int, help="number of frames (default: the scenario's length)")
     p.add_argument("--seed", type=int, default=0, help="random seed of the simulated scene (default 0)")
@@ -44,15 +47,23 @@ def _scenarios() -> dict[str, str]:
 
     out = {name: s.description for name, s in SCENARIOS.items()}
     out.update(SPECIAL)
-    out["NAME:body"] = ("any scenario above but calibration with its targets as textured, lit 3-D bodies "
-                        "(sphere, walking person, vehicle), truth their volume centroid")
+    out["NAME:body"] = ("any scenario above but calibration (the default): its targets are textured, lit 3-D "
+                        "bodies (sphere, walking person, vehicle), truth their volume centroid")
+    out["NAME:plate"] = "any scenario above but calibration with its targets as flat plates facing the cameras"
     return out
 
 
-def _known(name: str) -> bool:
-    from tracker.sim.scenarios import BODY_SUFFIX, SCENARIOS
+def scenario_name(name: str) -> str:
+    """The scenario `--scenario NAME` runs: NAME:body (solid bodies, the default), NAME:plate as given;
+    calibration as it is. Raises UserError for an unknown name."""
+    from tracker.sim.scenarios import BODY_SUFFIX, PLATE_SUFFIX, SCENARIOS
 
-    return name in SCENARIOS or name in SPECIAL or name.removesuffix(BODY_SUFFIX) in SCENARIOS
+    if name in SPECIAL:
+        return name
+    base = name.removesuffix(BODY_SUFFIX).removesuffix(PLATE_SUFFIX)
+    if base not in SCENARIOS:
+        raise UserError(f"unknown scenario {name!r}; known: {', '.join(_scenarios())}")
+    return name if base != name else name + BODY_SUFFIX
 
 
 def run(args: argparse.Namespace) -> int:
@@ -61,7 +72,8 @@ def run(args: argparse.Namespace) -> int:
         emit(_matching(args.matching), args.json)
         return 0
     if args.near_wall or args.startup:
-        if args.scenario or args.rig or args.epsilon is not None or args.alarms or (args.near_wall and args.startup):
+        if args.scenario or args.rig or args.epsilon is not None or args.alarms or args.all or (
+                args.near_wall and args.startup):
             raise UserError("--near-wall and --startup run their own scenes: give only --seed, --frames and --json")
         if args.frames is not None and args.frames < 1:
             raise UserError(f"--frames must be at least 1, got {args.frames}")
@@ -72,7 +84,7 @@ def run(args: argparse.Namespace) -> int:
             print(f"{name:14s} {desc}")
         return 0
     if args.alarms:
-        if args.scenario or args.frames is not None or args.rig or args.epsilon is not None:
+        if args.scenario or args.frames is not None or args.rig or args.epsilon is not None or args.all:
             raise UserError("--alarms runs the endless scene: give only --minutes, --seed and --json with it")
         if not 0 < args.minutes <= 600:
             raise UserError(f"--minutes must be above 0 and at most 600, got {args.minutes:g}")
@@ -82,12 +94,15 @@ def run(args: argparse.Namespace) -> int:
             raise UserError(f"--start must be at least 0, got {args.start:g}")
         emit(evaluate_alarms(args.minutes, args.seed, progress=Progress("eval alarms"), start_s=args.start), True)
         return 0
-    if not args.scenario:
-        raise UserError("give --scenario NAME, --alarms or --list")
-    if not _known(args.scenario):
-        raise UserError(f"unknown scenario {args.scenario!r}; known: {', '.join(names)}")
     if args.frames is not None and args.frames < 1:
         raise UserError(f"--frames must be at least 1, got {args.frames}")
+    if args.all:
+        if args.scenario or args.rig or args.epsilon is not None:
+            raise UserError("--all runs every scenario: give only --frames, --seed and --json with it")
+        return _all(args)
+    if not args.scenario:
+        raise UserError("give --scenario NAME, --all, --alarms or --list")
+    args.scenario = scenario_name(args.scenario)
     if args.scenario == "calibration":
         from calibration.scenario import run_calibration_scenario
 
@@ -112,6 +127,18 @@ def _tracking(args: argparse.Namespace) -> dict[str, object]:
     report = run_scenario(args.scenario, frames=args.frames, seed=args.seed, rig=rig, detector=det,
                           progress=Progress(f"eval {args.scenario}"))
     return report.to_json()
+
+
+def _all(args: argparse.Namespace) -> int:
+    from tmeye.eval_all import run_all, summary_lines
+
+    bar = Progress("eval --all")
+    result = run_all(args.frames, args.seed, done=lambda _name, n, total: bar(n, total))
+    if args.json:
+        emit(result, True)
+    else:
+        print("\n".join(summary_lines(result)))
+    return 0
 
 
 def _closed_loop(args: argparse.Namespace) -> dict[str, object]:

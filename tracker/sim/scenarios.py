@@ -183,17 +183,21 @@ def near_wall_scenario(gap_m: float, wall_m: float = 7.0, light: bool = False, f
 
 
 BODY_SUFFIX = ":body"
+PLATE_SUFFIX = ":plate"
 
 
 def get_scenario(name: str) -> Scenario:
-    """A scenario by name; `NAME:body` is scenario NAME with its targets drawn as solid bodies."""
-    base = name.removesuffix(BODY_SUFFIX)
+    """A scenario by name; `NAME:body` is scenario NAME with its targets drawn as solid bodies, `NAME:plate`
+    (or NAME alone) with its targets as flat plates."""
+    base = name.removesuffix(BODY_SUFFIX).removesuffix(PLATE_SUFFIX)
     try:
         scenario = SCENARIOS[base]
     except KeyError:
         raise ValueError(f"unknown scenario {name!r}; known: {', '.join(sorted(SCENARIOS))} "
-                         f"(each also as NAME{BODY_SUFFIX})") from None
-    return replace(scenario, name=name, bodies=True) if base != name else scenario
+                         f"(each also as NAME{BODY_SUFFIX} and NAME{PLATE_SUFFIX})") from None
+    if base == name:
+        return scenario
+    return replace(scenario, name=name, bodies=name.endswith(BODY_SUFFIX))
 
 
 class SimFrame:
