@@ -151,3 +151,15 @@ def test_targets_solid_puts_the_range_behind_the_seen_face() -> None:
         assert np.linalg.norm(np.cross(u, v)) / (np.linalg.norm(u) * np.linalg.norm(v)) < 2e-4
     bad = tmeye("track", "--targets", "round", "--frames", "1")
     assert bad.returncode == 2 and "invalid choice: 'round'" in bad.stderr
+
+
+def test_a_reader_that_goes_away_stops_track_quietly() -> None:
+    # `tmeye track --json | head -1`: the pipe closes after a line; no error line, the SIGPIPE status
+    proc = subprocess.Popen([sys.executable, "-m", "tmeye", "track", "--frames", "300", "--json", "--fast"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert proc.stdout is not None and proc.stderr is not None
+    first = json.loads(proc.stdout.readline())
+    proc.stdout.close()
+    err = proc.stderr.read()
+    assert proc.wait(timeout=120) == 141 and first["frame"] == 0
+    assert err == "", err

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 
 import cv2
@@ -35,6 +36,9 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         code = args.func(args)
+    except BrokenPipeError:  # the reader went away (`tmeye track --json | head`): stop quietly, as on SIGPIPE
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error at exit's flush
+        return 128 + 13
     except (UserError, ValueError, FileNotFoundError, OSError) as exc:
         print(f"tmeye {args.command}: error: {exc}", file=sys.stderr)
         return 2
