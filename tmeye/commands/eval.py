@@ -56,14 +56,15 @@ def _scenarios() -> dict[str, str]:
 def scenario_name(name: str) -> str:
     """The scenario `--scenario NAME` runs: NAME:body (solid bodies, the default), NAME:plate as given;
     calibration as it is. Raises UserError for an unknown name."""
-    from tracker.sim.scenarios import BODY_SUFFIX, PLATE_SUFFIX, SCENARIOS
+    from tracker.sim.scenarios import BODY_SUFFIX, split_name
 
     if name in SPECIAL:
         return name
-    base = name.removesuffix(BODY_SUFFIX).removesuffix(PLATE_SUFFIX)
-    if base not in SCENARIOS:
-        raise UserError(f"unknown scenario {name!r}; known: {', '.join(_scenarios())}")
-    return name if base != name else name + BODY_SUFFIX
+    try:
+        _, suffix = split_name(name)
+    except ValueError:
+        raise UserError(f"unknown scenario {name!r}; known: {', '.join(_scenarios())}") from None
+    return name if suffix else name + BODY_SUFFIX
 
 
 def run(args: argparse.Namespace) -> int:

@@ -186,18 +186,21 @@ BODY_SUFFIX = ":body"
 PLATE_SUFFIX = ":plate"
 
 
+def split_name(name: str) -> tuple[str, str]:
+    """A scenario name's base and its suffix (`:body`, `:plate` or ""); ValueError for an unknown base."""
+    base, suffix = next(((name[:-len(s)], s) for s in (BODY_SUFFIX, PLATE_SUFFIX) if name.endswith(s)), (name, ""))
+    if base not in SCENARIOS:
+        raise ValueError(f"unknown scenario {name!r}; known: {', '.join(sorted(SCENARIOS))} "
+                         f"(each also as NAME{BODY_SUFFIX} and NAME{PLATE_SUFFIX})")
+    return base, suffix
+
+
 def get_scenario(name: str) -> Scenario:
     """A scenario by name; `NAME:body` is scenario NAME with its targets drawn as solid bodies, `NAME:plate`
     (or NAME alone) with its targets as flat plates."""
-    base = name.removesuffix(BODY_SUFFIX).removesuffix(PLATE_SUFFIX)
-    try:
-        scenario = SCENARIOS[base]
-    except KeyError:
-        raise ValueError(f"unknown scenario {name!r}; known: {', '.join(sorted(SCENARIOS))} "
-                         f"(each also as NAME{BODY_SUFFIX} and NAME{PLATE_SUFFIX})") from None
-    if base == name:
-        return scenario
-    return replace(scenario, name=name, bodies=name.endswith(BODY_SUFFIX))
+    base, suffix = split_name(name)
+    scenario = SCENARIOS[base]
+    return replace(scenario, name=name, bodies=suffix == BODY_SUFFIX) if suffix else scenario
 
 
 class SimFrame:
