@@ -96,3 +96,33 @@ def test_tracker_settings_whose_record_cannot_be_committed_are_undone(rt: Runtim
     assert rt.tuning.as_dict()["detector"]["epsilon"] == eps + 3 and _rows(db_url) == (1, 1)
     with Session(make_engine(db_url)) as db:
         control.update_tuning(db, rt, _user(db), "10.0.0.9", {"detector": {"epsilon": eps}})
+
+
+def _other_live_track(runtime: Runtime) -> tuple[int, int]:
+    """The primary target and another track seen in the last frame, once the scene has two."""
+    assert runtime.comp is not None
+    deadline = time.monotonic() + 20.0
+    while time.monotonic() < deadline:
+        tracker = runtime.comp.pipeline.tracker
+        primary, live = tracker.primary_id, [tr.track_id for tr in list(tracker.tracks) if tr.missed == 0]
+        others = [t for t in live if t != primary]
+        if primary in live and others:
+            return primary, others[0]
+        time.sleep(0.05)
+    raise AssertionError("the two-targets scene never showed two tracks")
+
+
+def test_a_primary_choice_whose_audit_cannot_be_committed_is_undone(db_url: str) -> None:
+    runtime = Runtime(RuntimeConfig(scenario="two-targets", realtime=True, loop_source=True))
+    runtime.start()
+    try:
+        assert runtime.comp is not None
+        primary, other = _other_live_track(runtime)
+        with DiskFullAtCommit(make_engine(db_url)) as db, pytest.raises(OperationalError):
+            control.select_primary(db, runtime, _user(db), "10.0.0.9", other)
+        assert runtime.comp.pipeline.tracker.primary_id == primary and _rows(db_url) == (0, 0)
+        with Session(make_engine(db_url)) as db:
+            control.select_primary(db, runtime, _user(db), "10.0.0.9", other)
+        assert runtime.comp.pipeline.tracker.primary_id == other and _rows(db_url) == (1, 0)
+    finally:
+        runtime.stop()

@@ -34,6 +34,15 @@ class Track:
 
 
 @dataclass(frozen=True)
+class PrimaryBefore:
+    """What an operator's choice of primary target changed: the primary from before and the track the choice
+    confirmed (None: it was confirmed already)."""
+
+    primary_id: int | None
+    confirmed_id: int | None
+
+
+@dataclass(frozen=True)
 class TrackerConfig:
     gate_px: float = 40.0
     gate_growth_px: float = 4.0  # per frame without a detection
@@ -91,14 +100,25 @@ class MultiTracker:
         gate = [self.cfg.gate_px + self.cfg.gate_growth_px * tr.missed for tr in self.tracks]
         return [(int(r), int(c)) for r, c in zip(rows, cols, strict=True) if cost[r, c] <= gate[r]]
 
-    def select_primary(self, track_id: int) -> bool:
-        """Make a living track the primary target (an operator's choice); False if there is no such track."""
+    def select_primary(self, track_id: int) -> PrimaryBefore | None:
+        """Make a living track the primary target (an operator's choice); None if there is no such track,
+        else what `restore_primary` needs to undo the choice."""
         tr = self.get(track_id)
         if tr is None:
-            return False
+            return None
+        before = PrimaryBefore(self.primary_id, None if tr.confirmed else track_id)
         tr.confirmed = True
         self.primary_id = track_id
-        return True
+        return before
+
+    def restore_primary(self, before: PrimaryBefore) -> None:
+        """Undo `select_primary`: the primary target from before (the oldest confirmed track if it has
+        ended since), and the chosen track unconfirmed again if the choice had confirmed it."""
+        chosen = None if before.confirmed_id is None else self.get(before.confirmed_id)
+        if chosen is not None:
+            chosen.confirmed = chosen.hits >= self.cfg.confirm_hits
+        self.primary_id = before.primary_id
+        self._choose_primary()
 
     def _choose_primary(self) -> None:
         alive = {tr.track_id: tr for tr in self.tracks if tr.confirmed}

@@ -110,9 +110,10 @@ def point(db: Session, rt: Runtime, user: User, address: str, camera: str, u: fl
 def select_primary(db: Session, rt: Runtime, user: User, address: str, track_id: int) -> None:
     audit.record(db, user, address, "track.primary", str(track_id))
     _written_first(db)
-    if not wait(rt.select_primary(track_id)):
+    before = wait(rt.select_primary(track_id))
+    if before is None:
         raise NotFound(f"no live track {track_id} (it may have ended)")
-    db.commit()
+    _commit_or_undo(db, lambda: rt.restore_primary(before))
 
 
 def jog(db: Session, rt: Runtime, user: User, address: str, pan_dps: float, tilt_dps: float,

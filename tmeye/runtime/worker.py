@@ -33,6 +33,7 @@ from tmeye.runtime.telemetry import detection_json, telemetry
 from tracker.closedloop import LoopStep
 from tracker.frames import StereoFrame
 from tracker.geometry import StereoRig
+from tracker.tracks import PrimaryBefore
 
 log = logging.getLogger("tmeye.runtime")
 R = TypeVar("R")
@@ -358,15 +359,30 @@ class Runtime:
             return before
         return self.submit(apply)
 
-    def select_primary(self, track_id: int) -> Future[bool]:
-        """Make a living track the primary target; the Future holds False if there is no such track."""
-        def apply() -> bool:
+    def select_primary(self, track_id: int) -> Future[PrimaryBefore | None]:
+        """Make a living track the primary target; the Future holds None if there is no such track, else
+        what `restore_primary` undoes the choice with."""
+        def apply() -> PrimaryBefore | None:
             assert self.comp is not None
-            ok = self.comp.pipeline.tracker.select_primary(track_id)
-            if ok and self.comp.loop is not None and self.comp.loop.predictor is not None:
-                self.comp.loop.predictor.reset()  # a new target: the old one's motion says nothing
-            return ok
+            before = self.comp.pipeline.tracker.select_primary(track_id)
+            if before is not None:
+                self._reset_predictor()  # a new target: the old one's motion says nothing
+            return before
         return self.submit(apply)
+
+    def restore_primary(self, before: PrimaryBefore) -> Future[None]:
+        """Undo `select_primary` (its audit record was refused): the primary target from before, followed
+        afresh (the predictor was reset by the choice)."""
+        def apply() -> None:
+            assert self.comp is not None
+            self.comp.pipeline.tracker.restore_primary(before)
+            self._reset_predictor()
+        return self.submit(apply)
+
+    def _reset_predictor(self) -> None:
+        assert self.comp is not None
+        if self.comp.loop is not None and self.comp.loop.predictor is not None:
+            self.comp.loop.predictor.reset()
 
     def _point(self, camera: str, u: float, v: float) -> tuple[float, float, ServoWish]:
         servo = self._need_servo()
