@@ -5,12 +5,10 @@ from __future__ import annotations
 from typing import Any
 
 from fastapi import APIRouter
-from pydantic import ValidationError
 
 from server.deps import Address, Admin, CtxDep, DbDep, Viewer
 from server.schemas import Message, TrackerSettings, TrackerSettingsPatch
 from server.services import control
-from server.services.errors import Invalid, one_line
 
 router = APIRouter(prefix="/api/tracker", tags=["tracker"])
 
@@ -23,12 +21,4 @@ def get_config(ctx: CtxDep, _p: Viewer) -> dict[str, Any]:
 @router.patch("/config", response_model=TrackerSettings, responses={422: {"model": Message}},
               summary="Change some settings; applied from the next frame, kept across restarts")
 def patch_config(body: TrackerSettingsPatch, ctx: CtxDep, p: Admin, db: DbDep, addr: Address) -> dict[str, Any]:
-    merged = ctx.runtime.tuning.as_dict()
-    for section, values in body.model_dump(exclude_none=True).items():
-        merged[section].update(values)
-    try:
-        checked = TrackerSettings.model_validate(merged).model_dump()  # ranges, types, unknown names
-    except ValidationError as exc:
-        raise Invalid(one_line(exc)) from None
-    changes = {s: {k: v for k, v in checked[s].items() if k in (getattr(body, s) or {})} for s in checked}
-    return control.update_tuning(db, ctx.runtime, p.user, addr, changes)
+    return control.patch_tuning(db, ctx.runtime, p.user, addr, body)

@@ -22,30 +22,19 @@ def list_users(_p: Admin, db: DbDep) -> list[Any]:
 @router.post("/users", response_model=UserOut, status_code=201, responses={409: {"model": Message}},
              summary="Create a user (password 12 to 128 characters)")
 def create_user(body: UserIn, p: Admin, db: DbDep, addr: Address) -> Any:
-    user = user_service.create_user(db, body.username, body.password, body.role)
-    audit.record(db, p.user, addr, "user.create", body.username, {"role": body.role})
-    db.commit()
-    return user
+    return user_service.add_by_admin(db, p.user, addr, body.username, body.password, body.role)
 
 
 @router.patch("/users/{user_id}", response_model=UserOut, responses={404: {"model": Message}, 409: {"model": Message}},
               summary="Change password (ends the user's sessions), role or disabled")
 def patch_user(user_id: RowId, body: UserPatch, p: Admin, db: DbDep, addr: Address) -> Any:
-    user = user_service.update_user(db, user_service.get_user(db, user_id), body.password, body.role, body.disabled)
-    audit.record(db, p.user, addr, "user.update", user.username,
-                 {k: v for k, v in body.model_dump(exclude_none=True).items() if k != "password"}
-                 | ({"password": "changed"} if body.password else {}))
-    db.commit()
-    return user
+    return user_service.change_by_admin(db, p.user, addr, user_id, body.password, body.role, body.disabled)
 
 
 @router.delete("/users/{user_id}", status_code=204, responses={404: {"model": Message}, 409: {"model": Message}},
                summary="Delete a user")
 def delete_user(user_id: RowId, p: Admin, db: DbDep, addr: Address) -> None:
-    user = user_service.get_user(db, user_id)
-    user_service.delete_user(db, user)
-    audit.record(db, p.user, addr, "user.delete", user.username)
-    db.commit()
+    user_service.remove_by_admin(db, p.user, addr, user_id)
 
 
 @router.get("/audit", response_model=list[AuditOut], summary="Audit log, newest first")

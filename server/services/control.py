@@ -10,13 +10,15 @@ from concurrent.futures import Future
 from concurrent.futures import TimeoutError as FutureTimeout
 from typing import Any, TypeVar
 
+from pydantic import ValidationError
 from sqlalchemy import select
 from sqlalchemy.exc import OperationalError
 from sqlalchemy.orm import Session
 
 from server.db.models import ServoPreset, SettingsChange, User
+from server.schemas import TrackerSettings, TrackerSettingsPatch
 from server.services import audit
-from server.services.errors import Conflict, Invalid, NotFound
+from server.services.errors import Conflict, Invalid, NotFound, one_line
 from tmeye.runtime import NoServoError, Runtime, ServoMode, ServoRequestError, TrackerTuning
 from tmeye.runtime.servo import ServoWish
 
@@ -177,6 +179,22 @@ def saved_tuning(db: Session) -> dict[str, dict[str, Any]] | None:
     row = db.scalar(select(SettingsChange).where(SettingsChange.section == "tracker")
                     .order_by(SettingsChange.id.desc()).limit(1))
     return None if row is None else row.after
+
+
+def patch_tuning(db: Session, rt: Runtime, user: User, address: str, patch: TrackerSettingsPatch
+                 ) -> dict[str, dict[str, Any]]:
+    """Some tracker settings changed (the others as they are): checked whole (ranges, types, unknown names;
+    Invalid, nothing changed), then `update_tuning` with the ones the patch names."""
+    merged = rt.tuning.as_dict()
+    named = patch.model_dump(exclude_none=True)
+    for section, values in named.items():
+        merged[section].update(values)
+    try:
+        checked = TrackerSettings.model_validate(merged).model_dump()
+    except ValidationError as exc:
+        raise Invalid(one_line(exc)) from None
+    return update_tuning(db, rt, user, address,
+                         {s: {k: v for k, v in checked[s].items() if k in named.get(s, {})} for s in checked})
 
 
 def update_tuning(db: Session, rt: Runtime, user: User, address: str, new: dict[str, dict[str, Any]]

@@ -7,12 +7,14 @@ import os
 import secrets
 import time
 from pathlib import Path
+from typing import Any
 
 from sqlalchemy import func, select, update
 from sqlalchemy.orm import Session
 
 from server.db.models import AuthSession, User
 from server.security import check_password_rules, dummy_verify, hash_password, new_session_id, verify_password
+from server.services import audit
 from server.services.errors import Conflict, Invalid, NotFound
 
 ROLES = ("viewer", "operator", "admin")
@@ -85,6 +87,34 @@ def delete_user(db: Session, user: User) -> None:
     if user.role == "admin" and not user.disabled and _admins(db) <= 1:
         raise Conflict("the last admin cannot be deleted")
     db.delete(user)
+
+
+def add_by_admin(db: Session, admin: User, address: str, username: str, password: str, role: str) -> User:
+    """An admin's new user, recorded in the audit log, committed."""
+    user = create_user(db, username, password, role)
+    audit.record(db, admin, address, "user.create", username, {"role": role})
+    db.commit()
+    return user
+
+
+def change_by_admin(db: Session, admin: User, address: str, user_id: int, password: str | None, role: str | None,
+                    disabled: bool | None) -> User:
+    """An admin's change of a user (`update_user`), recorded without the password itself, committed."""
+    user = update_user(db, get_user(db, user_id), password, role, disabled)
+    detail: dict[str, Any] = {k: v for k, v in (("role", role), ("disabled", disabled)) if v is not None}
+    if password:
+        detail["password"] = "changed"
+    audit.record(db, admin, address, "user.update", user.username, detail)
+    db.commit()
+    return user
+
+
+def remove_by_admin(db: Session, admin: User, address: str, user_id: int) -> None:
+    """An admin's deletion of a user, recorded in the audit log, committed."""
+    user = get_user(db, user_id)
+    delete_user(db, user)
+    audit.record(db, admin, address, "user.delete", user.username)
+    db.commit()
 
 
 def authenticate(db: Session, username: str, password: str) -> User | None:
