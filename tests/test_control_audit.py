@@ -126,3 +126,30 @@ def test_a_primary_choice_whose_audit_cannot_be_committed_is_undone(db_url: str)
         assert runtime.comp.pipeline.tracker.primary_id == other and _rows(db_url) == (1, 0)
     finally:
         runtime.stop()
+
+
+def test_a_rig_switch_whose_audit_cannot_be_committed_is_switched_back(rt: Runtime, db_url: str) -> None:
+    from server.db.models import Calibration
+    from server.services import calibration
+
+    assert rt.comp is not None
+    before = rt.comp.rig
+    new = before.to_dict()
+    for side in ("left", "right"):  # the lens centres 1 % farther apart: another rig
+        new[side]["c"] = [float(v) * 1.01 for v in new[side]["c"]]  # type: ignore[index]
+    new["baseline_m"] = 1.01 * before.baseline
+    with Session(make_engine(db_url)) as db:
+        db.add(Calibration(created_at=time.time(), status="done", board_cols=9, board_rows=6, square_m=0.025,
+                           image_hashes=[], image_dir="", rig=new, active=False))
+        db.commit()
+    with DiskFullAtCommit(make_engine(db_url)) as db, pytest.raises(OperationalError):
+        rec = db.scalars(select(Calibration)).one()
+        calibration.activate(db, rt, rec, _user(db), "10.0.0.9")
+    assert rt.comp.rig.baseline == pytest.approx(before.baseline) and _rows(db_url) == (0, 0)
+    with Session(make_engine(db_url)) as db:
+        rec = db.scalars(select(Calibration)).one()
+        calibration.activate(db, rt, rec, _user(db), "10.0.0.9")
+        assert rec.active
+    assert rt.comp.rig.baseline == pytest.approx(1.01 * before.baseline) and _rows(db_url) == (1, 0)
+    rt.switch_rig(before).result(120)
+

@@ -25,6 +25,7 @@ from typing import Any
 import cv2
 import numpy as np
 from sqlalchemy import select, update
+from sqlalchemy.exc import OperationalError
 from sqlalchemy.orm import Session, sessionmaker
 
 from calibration.board import BoardSpec
@@ -204,15 +205,27 @@ def active_rig(db: Session) -> StereoRig | None:
 
 def activate(db: Session, runtime: Runtime, rec: Calibration, user: User, address: str) -> None:
     """Switch the runtime to the record's rig (the new pipeline learns its background first), then mark
-    the record active."""
+    the record active. Should that commit fail (a disk full at that moment), the runtime is switched back
+    to the rig from before: no rig is used without its audit record. (The record is not written first, as
+    the other control actions' are: SQLite's write lock, held through a switch of up to 120 s, would stall
+    the track writer.)"""
     rig = rig_of(rec)
+    assert runtime.comp is not None
+    before = runtime.comp.rig
     try:
         runtime.switch_rig(rig).result(timeout=SWITCH_TIMEOUT_S)
     except FutureTimeout:
         raise Unavailable("the tracker did not switch rig in time") from None
     except Exception as exc:
         raise Invalid(f"calibration {rec.id}'s rig cannot be used: {exc}") from None
-    set_active(db, rec, user, address)
+    try:
+        set_active(db, rec, user, address)
+    except OperationalError:
+        try:
+            runtime.switch_rig(before).result(timeout=SWITCH_TIMEOUT_S)
+        except Exception as exc:  # the 503 still goes out; the log says what stands
+            log.warning("a rig switch whose audit record was refused could not be undone: %s", exc)
+        raise
 
 
 def set_active(db: Session, rec: Calibration, user: User, address: str) -> None:
