@@ -25,7 +25,6 @@ from typing import Any
 import cv2
 import numpy as np
 from sqlalchemy import select, update
-from sqlalchemy.exc import OperationalError
 from sqlalchemy.orm import Session, sessionmaker
 
 from calibration.board import BoardSpec
@@ -33,7 +32,7 @@ from calibration.errors import CalibrationError
 from calibration.stereo import MIN_VIEWS
 from server.db.models import Calibration, User
 from server.services import audit
-from server.services.control import Unavailable
+from server.services.control import Unavailable, commit_or_undo
 from server.services.errors import Conflict, Invalid, NotFound
 from server.services.events import EventBus
 from tmeye.runtime import Runtime
@@ -218,21 +217,10 @@ def activate(db: Session, runtime: Runtime, rec: Calibration, user: User, addres
         raise Unavailable("the tracker did not switch rig in time") from None
     except Exception as exc:
         raise Invalid(f"calibration {rec.id}'s rig cannot be used: {exc}") from None
-    try:
-        set_active(db, rec, user, address)
-    except OperationalError:
-        try:
-            runtime.switch_rig(before).result(timeout=SWITCH_TIMEOUT_S)
-        except Exception as exc:  # the 503 still goes out; the log says what stands
-            log.warning("a rig switch whose audit record was refused could not be undone: %s", exc)
-        raise
-
-
-def set_active(db: Session, rec: Calibration, user: User, address: str) -> None:
     db.execute(update(Calibration).values(active=False))
     rec.active = True
     audit.record(db, user, address, "calibration.activate", str(rec.id))
-    db.commit()
+    commit_or_undo(db, lambda: runtime.switch_rig(before), SWITCH_TIMEOUT_S)
 
 
 def as_json(rec: Calibration, report: bool = False) -> dict[str, Any]:

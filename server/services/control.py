@@ -66,15 +66,15 @@ def _written_first(db: Session) -> None:
     db.flush()
 
 
-def _commit_or_undo(db: Session, undo: Callable[[], Future[Any]]) -> None:
+def commit_or_undo(db: Session, undo: Callable[[], Future[Any]], timeout_s: float = REQUEST_TIMEOUT_S) -> None:
     """Commit an action's rows, written before the runtime took the request. Should the commit itself fail
-    (a disk full at that moment), the request is undone first, so the 503 ("nothing was changed") holds and
-    no control action goes unaudited."""
+    (a disk full at that moment), the request is undone first (waiting up to timeout_s), so the 503
+    ("nothing was changed") holds and no control action goes unaudited."""
     try:
         db.commit()
     except OperationalError:
         try:
-            undo().result(timeout=REQUEST_TIMEOUT_S)
+            undo().result(timeout=timeout_s)
         except Exception as exc:  # the 503 still goes out; the log says what stands
             log.warning("a request whose audit record was refused could not be undone: %s", exc)
         raise
@@ -85,7 +85,7 @@ def _servo_action(db: Session, rt: Runtime, request: Callable[[], Future[ServoWi
     (or the request undone); the servo's state after it."""
     _written_first(db)
     before = wait(request())
-    _commit_or_undo(db, lambda: rt.servo_restore(before))
+    commit_or_undo(db, lambda: rt.servo_restore(before))
     return servo_state(rt)
 
 
@@ -105,7 +105,7 @@ def point(db: Session, rt: Runtime, user: User, address: str, camera: str, u: fl
     _written_first(db)
     pan, tilt, before = wait(rt.servo_point(camera, u, v))
     entry.detail = {"u": u, "v": v, "pan_deg": round(pan, 4), "tilt_deg": round(tilt, 4)}
-    _commit_or_undo(db, lambda: rt.servo_restore(before))
+    commit_or_undo(db, lambda: rt.servo_restore(before))
     return servo_state(rt)
 
 
@@ -115,7 +115,7 @@ def select_primary(db: Session, rt: Runtime, user: User, address: str, track_id:
     before = wait(rt.select_primary(track_id))
     if before is None:
         raise NotFound(f"no live track {track_id} (it may have ended)")
-    _commit_or_undo(db, lambda: rt.restore_primary(before))
+    commit_or_undo(db, lambda: rt.restore_primary(before))
 
 
 def jog(db: Session, rt: Runtime, user: User, address: str, pan_dps: float, tilt_dps: float,
@@ -208,5 +208,5 @@ def update_tuning(db: Session, rt: Runtime, user: User, address: str, new: dict[
     audit.record(db, user, address, "tracker.config", None, {s: c for s, c in changed.items() if c})
     _written_first(db)
     wait(rt.set_tuning(tuning))
-    _commit_or_undo(db, lambda: rt.set_tuning(old))
+    commit_or_undo(db, lambda: rt.set_tuning(old))
     return after
