@@ -82,6 +82,21 @@ def test_a_shadow_on_the_wall_raises_no_target() -> None:
         assert res.detections == ()
 
 
+def test_a_change_only_the_left_camera_sees_raises_no_target() -> None:
+    """A patch of the wall's own texture shown in the left image only (a reflection one camera sees) is
+    unlike the temporal background and matches the right image at a disparity far clear of the wall (its
+    source, 100 px away): the right camera's eq. (9) shows nothing there, so it is not an object."""
+    sim, pipe = _empty_wall(light=False)
+    for _ in range(90):
+        pipe.step(sim.step().frame)
+    for _ in range(10):
+        f = sim.step().frame
+        left = f.left.copy()
+        left[200:236, 400:436] = left[200:236, 300:336]
+        res = pipe.step(StereoFrame(f.index, left, f.right, f.t_left, f.t_right, f.gimbal))
+        assert res.detections == ()
+
+
 def test_texture_correlation_tells_relit_background_from_a_new_surface() -> None:
     rng = np.random.default_rng(1)
     bg = rng.uniform(30, 170, (40, 40)).astype(np.float32)

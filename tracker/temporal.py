@@ -18,8 +18,10 @@ temporal model (background B and mean deviation D per pixel, at gain 1; tracker.
    light) is dropped; the range comes from matching the region itself between the two cameras
    (tracker.stereo through the verifier's strips) and must not lie behind the known background by more
    than `behind_tolerance_px` (a background uncovered where the learnt geometry held an object lies
-   behind it); of a region that also holds something at another depth, the part that is one surface at
-   the matched disparity is kept (and matched again).
+   behind it); a region matched clear of its background must show in the right camera's eq. (9) at that
+   disparity too (a small region searched over the whole range may match a look-alike far off: a head of
+   95 px at 27 m matched at 153 px, 1.2 m); of a region that also holds something at another depth, the
+   part that is one surface at the matched disparity is kept (and matched again).
 """
 
 from __future__ import annotations
@@ -40,6 +42,7 @@ from tracker.verify import Blob, Verifier
 F32 = NDArray[np.float32]
 F64 = NDArray[np.float64]
 U8 = NDArray[np.uint8]
+BoolA = NDArray[np.bool_]
 _NB = np.ones((3, 3), np.uint8)
 
 
@@ -49,12 +52,14 @@ class TemporalConfig:
     region above which it is the background relit; behind_tolerance_px: how far behind the background
     (disparity, px; the background's is the median over the region) a region may match; learnt_updates:
     updates of the background's deviation D a row needs before it raises candidates (each row is updated
-    every 24 frames)."""
+    every 24 frames); right_seen_share: of a region matched clear of its background (beyond twice the
+    stereo depth test), the share the right camera's eq. (9) mask must cover at the matched disparity."""
 
     min_area_px: int = 64
     max_texture_corr: float = 0.6
     behind_tolerance_px: float = 0.15
     learnt_updates: int = 3
+    right_seen_share: float = 0.5
 
 
 def global_gain(key: U8, bg: F32) -> float | None:
@@ -189,8 +194,18 @@ class TemporalDetector:
     def _near_background(self, b: Blob) -> bool:
         """Whether a stereo object is within twice the depth-gap test of its background: its residual then
         shows only parts of it, and the temporal model's outline may hold more."""
+        return self._near(b.disparity, b.bg_disparity)
+
+    def _near(self, d: float, d_bg: float) -> bool:
+        """Whether disparity d (px) is within twice the depth-gap test of the background's d_bg."""
         cfg = self.sub.cfg
-        return b.disparity < b.bg_disparity * (1.0 + 2.0 * cfg.min_depth_gap) + 2.0 * cfg.min_disparity_gap_px
+        return d < d_bg * (1.0 + 2.0 * cfg.min_depth_gap) + 2.0 * cfg.min_disparity_gap_px
+
+    def _right_sees(self, frame: StereoFrame, box: Box, obj: BoolA, d: float) -> bool:
+        """Whether the right camera's eq. (9) mask, sampled at disparity d, covers at least
+        `right_seen_share` of the region (an object clear of its background shows in both keys)."""
+        seen = self.verifier.right_key_at(frame, box, d)
+        return int(np.count_nonzero(seen & obj)) >= self.cfg.right_seen_share * int(np.count_nonzero(obj))
 
     def _groups(self, fg: U8) -> list[Box]:
         """Boxes (raw pixels, with the detector's margin) around groups of changed cells large enough."""
@@ -243,6 +258,8 @@ class TemporalDetector:
         d_med = float(np.median(cm.disparity[known])) if np.any(known) else d_bg
         if fine.disparity < d_med - max(cfg.behind_tolerance_px, 3.0 * fine.sigma):
             return None  # behind the known background: background uncovered, not an object
+        if not self._near(fine.disparity, d_med) and not self._right_sees(frame, box, obj, fine.disparity):
+            return None  # clear of the background, yet the right camera sees nothing there: a false match
         # eq. (10) in rectified coordinates, pixels weighted by their area: Σ a x / Σ a, Σ a y / Σ a
         sx, sy, sa, _ = cv2.mean(self.verifier.rect.area_moments[y0:y1, x0:x1], mask=m8)
         return Blob(box, obj, area, c_raw, np.array([sx / sa, sy / sa]), fine.disparity, fine.sigma, d_bg,

@@ -253,7 +253,7 @@ class Verifier:
         d_hint = self._coarse_disparity(frame, box, m_left, d_hint)
         if d_hint is None:
             return None
-        m_right = self._right_key_at(frame, box, d_hint)
+        m_right = self.right_key_at(frame, box, d_hint)
         obj = largest_component(m_left & m_right)
         if int(np.count_nonzero(obj)) < self.cfg.min_area_px:
             return None
@@ -309,7 +309,7 @@ class Verifier:
         return _Strips(rect, (x0, y0), (rx0, ry0, rx1, ry1), rect.rectify(frame.left, 0, box_r),
                        rect.rectify(frame.right, 1, box_r), rx0 - sx0, d_hi, clipped)
 
-    def _right_key_at(self, frame: StereoFrame, box: Box, d: float) -> BoolA:
+    def right_key_at(self, frame: StereoFrame, box: Box, d: float) -> BoolA:
         """The right-key mask of eq. (9), sampled at the left box's pixels shifted by disparity d."""
         rect = self.rect
         x0, y0, x1, y1 = box
