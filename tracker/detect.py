@@ -37,6 +37,17 @@ def paint_masks(masks: list[tuple[Box, NDArray[np.bool_]]], row0: int, shape: tu
     return out
 
 
+MARGIN_REL = 0.04  # of an object's rows: the margin about it the temporal background is not updated in
+
+
+def object_margin(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    """An object's mask grown by max(2, MARGIN_REL x its rows) px (a disc): what the temporal background
+    leaves alone about it (its box is larger than the mask by the detector's margin, which this stays in)."""
+    r = max(2, int(round(MARGIN_REL * mask.shape[0])))
+    disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
+    return np.asarray(cv2.dilate(mask.astype(np.uint8), disc) > 0)
+
+
 @dataclass(frozen=True)
 class DetectorConfig:
     """epsilon: eq. (9) threshold ε in grey levels; stride: candidate-search subsampling; min_area_px:
@@ -233,7 +244,9 @@ class StereoSubtractor:
     def update_left_background(self, frame: StereoFrame, objects: list[tuple[Box, NDArray[np.bool_]]],
                                gain: float, stripes: int = 24, alpha: float = 0.3) -> None:
         """Adapt the temporal background B ← B + α (Γ/g - B) on one horizontal stripe per frame (each
-        row every `stripes` frames), away from objects; g is the global gain of this frame."""
+        row every `stripes` frames), away from objects and a margin about them (object_margin: an outline
+        that missed a rim or a limb must not teach the model the object, which would then show as a ghost
+        where it was); g is the global gain of this frame."""
         model = self.left_background(frame.gimbal)
         if model is None:
             return
@@ -244,7 +257,7 @@ class StereoSubtractor:
         y0, y1 = k * h // stripes, (k + 1) * h // stripes
         self.left_learnt[self._pose(frame.gimbal)][y0:y1] += 1
         cur = frame.left[y0:y1].astype(np.float32) * np.float32(1.0 / max(gain, 1e-3))
-        keep = paint_masks(objects, y0, (y1 - y0, bg.shape[1])) if objects else None
+        keep = paint_masks([(b, object_margin(m)) for b, m in objects], y0, (y1 - y0, bg.shape[1])) if objects else None
         a = np.float32(alpha)
         new_dev = dev[y0:y1] + a * (np.abs(cur - bg[y0:y1]) - dev[y0:y1])  # D ← D + α(|Γ/g - B| - D)
         new_bg = bg[y0:y1] + a * (cur - bg[y0:y1])  # B ← B + α(Γ/g - B)
