@@ -14,7 +14,13 @@ the temporal model:
 each the least over the windows W (window_px square) that hold p ("shiftable windows"). A pixel within
 band_px of the outline joins the object where C_o + n_W · margin < min(C_s, C_t) (n_W = window_px²) and
 where it may: its background is known and still (3 g D < ε), and it is no other object's nor a changed
-pixel that the temporal outline left out. The object is then what stays 8-connected to it.
+pixel that the temporal outline left out. The object is then what stays 8-connected to it. That is
+repeated `rounds` times from what joined, the rounds after the first only within the outline's box: a
+walker's far leg, dark against dark ground, is wider than a band. Four rounds against one, on the nine
+`NAME:body` scenarios: pixel F1 up by 0.000 to 0.006 on each, azimuth RMSE on walk 0.158 -> 0.142° and
+elevation 0.599 -> 0.578°, no figure worse by more than 0.003° or 0.03 px; ten rounds went on to take the
+ground at the feet of standing walkers in endless:body (identity switches 4 -> 9, azimuth RMSE against
+the seen surface 0.179 -> 0.349°).
 
 With one centred window per pixel, the side with the stronger contrast wins a window across the outline: a
 bright ball gained a ring one pixel wide all round. Shiftable windows give each side a window of its own
@@ -52,18 +58,21 @@ Box = tuple[int, int, int, int]
 
 @dataclass(frozen=True)
 class RimConfig:
-    """band_px: how far beyond the outline (px) pixels may join; window_px: the side of W (odd, at most 15:
-    the sums stay within 16 bits); margin: how much better the object hypothesis must match, in grey levels
-    per pixel of W (mean absolute difference)."""
+    """band_px: how far beyond the outline (px) pixels may join in a round; window_px: the side of W (odd,
+    at most 15: the sums stay within 16 bits); margin: how much better the object hypothesis must match, in
+    grey levels per pixel of W (mean absolute difference); rounds: how many times the band is grown from
+    what joined (the rounds after the first within the outline's box)."""
 
     band_px: int = 3
     window_px: int = 5
     margin: int = 2
+    rounds: int = 4
 
     def __post_init__(self) -> None:
-        if not (1 <= self.window_px <= 15 and self.window_px % 2 == 1) or self.band_px < 1 or self.margin < 0:
-            raise ValueError(f"rim window_px must be odd in 1..15, band_px >= 1 and margin >= 0, got "
-                             f"{self.window_px}, {self.band_px}, {self.margin}")
+        if (not (1 <= self.window_px <= 15 and self.window_px % 2 == 1) or self.band_px < 1 or self.margin < 0
+                or self.rounds < 1):
+            raise ValueError(f"rim window_px must be odd in 1..15, band_px and rounds >= 1 and margin >= 0, "
+                             f"got {self.window_px}, {self.band_px}, {self.rounds}, {self.margin}")
 
 
 def recover_rim(obj: BoolA, left: U8, right_obj: U8, right_bg: U8, temporal_bg: U8, allowed: BoolA,
@@ -73,9 +82,6 @@ def recover_rim(obj: BoolA, left: U8, right_obj: U8, right_bg: U8, temporal_bg: 
     background's; temporal_bg g B; allowed where pixels may join (the background known and still, no
     other object's)."""
     band_k = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * cfg.band_px + 1, 2 * cfg.band_px + 1))
-    band = (cv2.dilate(obj.view(np.uint8), band_k) > 0) & ~obj & allowed
-    if not band.any():
-        return obj
     win = (cfg.window_px, cfg.window_px)
     shift = np.ones(win, np.uint8)
 
@@ -86,13 +92,22 @@ def recover_rim(obj: BoolA, left: U8, right_obj: U8, right_bg: U8, temporal_bg: 
     n_w = cfg.window_px * cfg.window_px  # the thresholds are per pixel: Σ over W = n_w times the mean
     c_o = cost(right_obj)
     c_b = np.minimum(cost(right_bg), cost(temporal_bg))
-    join = band & (c_o + n_w * cfg.margin < c_b)
-    if not join.any():
-        return obj
-    n, labels = cv2.connectedComponents((obj | join).view(np.uint8), connectivity=8)
-    keep = np.bincount(labels[obj], minlength=n) > 0  # the components that hold the object
-    keep[0] = False
-    return np.asarray(keep[labels])
+    better = c_o + n_w * cfg.margin < c_b
+    bx, by, bw, bh = cv2.boundingRect(obj.view(np.uint8))
+    inside = np.zeros_like(obj)
+    inside[by:by + bh, bx:bx + bw] = True
+    for r in range(cfg.rounds):
+        band = (cv2.dilate(obj.view(np.uint8), band_k) > 0) & ~obj & allowed
+        if r:
+            band &= inside
+        join = band & better
+        if not join.any():
+            return obj
+        n, labels = cv2.connectedComponents((obj | join).view(np.uint8), connectivity=8)
+        keep = np.bincount(labels[obj], minlength=n) > 0  # the components that hold the object
+        keep[0] = False
+        obj = np.asarray(keep[labels])
+    return obj
 
 
 DEFAULT_RIM = RimConfig()
