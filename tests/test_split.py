@@ -107,8 +107,14 @@ def test_a_head_further_above_a_torso_that_lost_its_shoulders_middle_is_part_of_
     head[15:33, 42:58] = True  # its lowest row 7 rows above the torso's, in the torso's columns
     assert same_body(torso, 20.0, head, 20.2) and same_body(head, 20.2, torso, 20.0)
     lower = torso.copy()
-    lower[30:45, 35:65] = False  # 12 rows below the head: more than 9
-    assert not same_body(lower, 20.0, head, 20.2)
+    lower[30:45, 35:65] = False  # the torso under the head 12 rows below it (pan:body frame 47): a small
+    assert same_body(lower, 20.0, head, 20.2)  # part within the torso's box grown by 9 rows still joins
+    high = np.zeros_like(torso)
+    high[2:20, 42:58] = True  # 10 rows above the torso's box
+    assert not same_body(torso, 20.0, high, 20.2) and not same_body(lower, 20.0, high, 20.2)
+    big = np.zeros_like(torso)
+    big[0:25, 40:60] = True  # over a tenth of the torso: a part only by its pixels' gap (21 rows)
+    assert not same_body(lower, 20.0, big, 20.2)
     beside = np.zeros_like(torso)
     beside[40:100, 84:96] = True  # another body 4 px to the side, at the same depth
     assert not same_body(torso, 20.0, beside, 20.0)

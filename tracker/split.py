@@ -96,15 +96,20 @@ PART_GAP_REL = 0.03
 # shoulders (a person's neck and collar close to the background's grey), pan:body frame 62: 7.6 px apart
 # at 89 rows, the head then reported as a target of its own with the torso's centroid 50 px below it
 PART_STACK_REL = 0.1
+# and a region under a tenth of the other's pixels, its middle column within the other's columns, within
+# the other's box grown by that many rows: pan:body frame 47, a head 7 rows above a torso's box whose
+# pixels under it began 18 rows lower, reported as a target of its own 5.5° above the walker
+PART_INSIDE_SHARE = 10
 
 
 def same_body(a: BoolA, d_a: float, b: BoolA, d_b: float) -> bool:
     """Whether region b (box pixels, disparity d_b px) is a part of the body of region a (d_a): their
     disparities differ by less than the rival gap of own_pixels (max(MIN_GAP_PX, MIN_GAP_REL d)) and b lies
     within max(PART_GAP_MIN_PX, PART_GAP_REL h) px of a, or, the smaller one's middle column within the
-    other's columns, as far sideways and PART_STACK_REL h rows above or below it; h the rows the
-    taller of the two spans, whichever was found first (a head verified before its body is as much a part of
-    it as after)."""
+    other's columns, as far sideways and PART_STACK_REL h rows above or below it, or, the smaller one under
+    1/PART_INSIDE_SHARE of the other's pixels with its middle column within the other's columns, within
+    PART_STACK_REL h rows of the other's rows; h the rows the taller of the two spans, whichever was found
+    first (a head verified before its body is as much a part of it as after)."""
     if abs(d_a - d_b) >= max(MIN_GAP_PX, MIN_GAP_REL * max(d_a, d_b)):
         return False
     rows, rows_b = np.flatnonzero(a.any(axis=1)), np.flatnonzero(b.any(axis=1))
@@ -117,6 +122,12 @@ def same_body(a: BoolA, d_a: float, b: BoolA, d_b: float) -> bool:
     # rectangle holds the disc of radius gap, so one dilation decides
     small, big = (a, b) if np.count_nonzero(a) < np.count_nonzero(b) else (b, a)
     cols, cols_big = np.flatnonzero(small.any(axis=0)), np.flatnonzero(big.any(axis=0))
+    rows_s, rows_g = np.flatnonzero(small.any(axis=1)), np.flatnonzero(big.any(axis=1))
+    stack = max(gap, int(round(PART_STACK_REL * h)))
+    if (np.count_nonzero(small) * PART_INSIDE_SHARE < np.count_nonzero(big)
+            and cols_big[0] <= (cols[0] + cols[-1]) / 2.0 <= cols_big[-1]
+            and rows_g[0] - stack <= rows_s[-1] and rows_s[0] <= rows_g[-1] + stack):
+        return True  # a small part within the body's rows grown by `stack`
     if cols_big[0] <= (cols[0] + cols[-1]) / 2.0 <= cols_big[-1]:
         k = np.ones((2 * max(gap, int(round(PART_STACK_REL * h))) + 1, 2 * gap + 1), np.uint8)
     else:

@@ -78,6 +78,14 @@ def _taken(blob: Blob, changed: BoolA | None) -> BoolA:
     return _grown(m8 | shadow)
 
 
+def _part_of(found: list[Blob], region: BoolA, area: int, min_area: int) -> Blob | None:
+    """The object found before of which a region too small to be a second object lies where a part of
+    its body would (split.same_body at the object's own disparity), or None (or when under min_area px)."""
+    if area < min_area:
+        return None
+    return next((f for f in found if same_body(f.mask, f.disparity, region, f.disparity)), None)
+
+
 def found_pixels(found: list[Blob]) -> BoolA | None:
     """The pixels (grown by two) of the objects found before in a box, or None: not the background of a
     region verified after them, so left out of its temporal outline's gain. Parts of the same body too:
@@ -117,15 +125,18 @@ class Verifier:
         found: list[Blob] = []
         free = np.ones(m_raw.shape, bool)  # pixels no object found so far explains
         min_area = cfg.min_area_px
-        for _ in range(max_objects):
-            if int(np.count_nonzero(m_raw)) < min_area:
+        for _ in range(max_objects + 2):  # two more for regions that are parts of a body found
+            if int(np.count_nonzero(m_raw)) < cfg.min_area_px:
                 break
             # where the object overlaps its own ghost, Γ and Θ both show the object and may agree: holes
             m_left = largest_component(m_raw, close=True)
             n_left = int(np.count_nonzero(m_left))
-            if n_left < min_area:
+            # a second object in the box must be substantial (min_area), but a part of a body found before
+            # (a head past the neck's gap) only has to be a part: it is verified at the body's disparity
+            part_of = _part_of(found, m_left, n_left, 4 * cfg.min_area_px) if n_left < min_area else None
+            if n_left < min_area and part_of is None:
                 break
-            hint = nearest_hint(hints, m_left, box)
+            hint = part_of.disparity if part_of is not None else nearest_hint(hints, m_left, box)
             around = hints_around(hints, m_left, box)
             new_later = hint is None and may_search is not None and not may_search()
             got = None if new_later or self._too_small_to_be_new(n_left, hint) else self._verify_region(
@@ -134,17 +145,20 @@ class Verifier:
                 m_raw = m_raw & ~m_left  # not an object: try what else the box holds
                 continue
             blob, changed = got
-            part_of = next((k for k, f in enumerate(found)
-                            if same_body(f.mask, f.disparity, blob.mask, blob.disparity)), None)
-            if part_of is not None:  # a part of a body found before (a head past the neck's gap): one object,
-                first = found.pop(part_of)  # with the disparity and match of the part verified first
+            k = next((k for k, f in enumerate(found)
+                      if same_body(f.mask, f.disparity, blob.mask, blob.disparity)), None)
+            if k is None and part_of is not None:  # admitted as a part, but not at the body's depth
+                m_raw = m_raw & ~m_left
+                continue
+            if k is not None:  # a part of a body found before: one object, with the disparity and match of
+                first = found.pop(k)  # the part verified first
                 blob = join(first, blob, self.rect.area_moments, lead=first)
             found.append(blob)
             # a second object in the same box must be substantial: not the rim left around the first
             min_area = max(min_area, 4 * cfg.min_area_px, blob.area // 10)
             taken = _taken(blob, changed)
             m_raw, free = m_raw & ~taken, free & ~taken
-            if len(found) == max_objects or int(np.count_nonzero(m_raw)) < min_area:
+            if len(found) == max_objects:
                 break
         return found
 
