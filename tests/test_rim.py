@@ -62,7 +62,7 @@ def test_a_limb_with_the_backgrounds_grey_joins_the_object() -> None:
     left, r_obj, r_bg, temporal, disc, limb = _scene(limb_amp=10.0)
     obj = disc & ~limb
     assert np.count_nonzero(_missed(left, temporal, disc) & limb) < 0.25 * np.count_nonzero(limb)
-    out = recover_rim(obj, left, r_obj, r_bg, temporal, np.ones_like(disc), RimConfig())
+    out = recover_rim(obj, left, [r_obj], r_bg, temporal, np.ones_like(disc), RimConfig())
     assert np.count_nonzero(out & limb) > 0.3 * np.count_nonzero(limb)
     assert not np.any(out & ~disc)
     cx = lambda m: float(np.nonzero(m)[1].mean())  # noqa: E731
@@ -76,10 +76,10 @@ def test_a_limb_wider_than_the_band_inside_the_outlines_box_joins() -> None:
     round (the band alone) 44 %."""
     left, r_obj, r_bg, temporal, disc, limb = _scene(limb_amp=10.0, wide=True)
     obj = disc & ~limb
-    out = recover_rim(obj, left, r_obj, r_bg, temporal, np.ones_like(disc), RimConfig())
+    out = recover_rim(obj, left, [r_obj], r_bg, temporal, np.ones_like(disc), RimConfig())
     assert np.count_nonzero(out & limb) > 0.65 * np.count_nonzero(limb)
     assert not np.any(out & ~disc)
-    once = recover_rim(obj, left, r_obj, r_bg, temporal, np.ones_like(disc), RimConfig(rounds=1))
+    once = recover_rim(obj, left, [r_obj], r_bg, temporal, np.ones_like(disc), RimConfig(rounds=1))
     assert np.count_nonzero(once & limb) < 0.5 * np.count_nonzero(limb)
 
 
@@ -88,7 +88,7 @@ def test_a_whole_outline_is_not_fattened(textured: bool) -> None:
     """A disc seen whole gains at most a few pixels: a centred window beside a bright disc matches the
     disc's disparity better and added about 70 px round this one's perimeter (157 px)."""
     left, r_obj, r_bg, temporal, disc, _ = _scene(limb_amp=25.0, textured=textured)
-    out = recover_rim(disc, left, r_obj, r_bg, temporal, np.ones_like(disc), RimConfig())
+    out = recover_rim(disc, left, [r_obj], r_bg, temporal, np.ones_like(disc), RimConfig())
     assert np.count_nonzero(out & ~disc) <= 8
     assert np.array_equal(out & disc, disc)
 
@@ -98,7 +98,7 @@ def test_pixels_not_allowed_do_not_join() -> None:
     obj = disc & ~limb
     allowed = np.ones_like(disc)
     allowed[:45] = False  # another object's pixels, changed pixels, or a background that moves there
-    out = recover_rim(obj, left, r_obj, r_bg, temporal, allowed, RimConfig())
+    out = recover_rim(obj, left, [r_obj], r_bg, temporal, allowed, RimConfig())
     assert not np.any(out[:45] & ~obj[:45]) and np.any(out[45:] & limb[45:])
 
 
@@ -113,7 +113,22 @@ def test_without_the_temporal_model_the_stereo_background_holds_all_but_the_shad
     the right camera sees the disc in front of): why rim recovery waits for the cameras to stand still."""
     left, r_obj, r_bg, temporal, disc, _ = _scene(limb_amp=25.0)
     useless = (255 - temporal).astype(np.uint8)
-    out = recover_rim(disc, left, r_obj, r_bg, useless, np.ones_like(disc), RimConfig())
+    out = recover_rim(disc, left, [r_obj], r_bg, useless, np.ones_like(disc), RimConfig())
     grown = out & ~disc
     xs = np.nonzero(grown)[1]
     assert xs.size > 20 and xs.max() < 60  # the shadow side only: left of the disc's centre column
+
+
+def test_a_limb_at_another_depth_of_the_object_joins_on_the_picture_that_matches_it() -> None:
+    """The object is matched at several of its depths (the right image at d and d (1 ± slant)): a limb
+    joins where any of them matches it better than the background; on a picture that matches nowhere
+    it does not."""
+    left, r_obj, r_bg, temporal, disc, limb = _scene(limb_amp=10.0)
+    obj = disc & ~limb
+    rng = np.random.default_rng(7)
+    other = rng.integers(0, 256, r_obj.shape).astype(np.uint8)  # the right image at a depth that fits nothing
+    one = recover_rim(obj, left, [r_obj], r_bg, temporal, np.ones_like(disc), RimConfig())
+    both = recover_rim(obj, left, [other, r_obj], r_bg, temporal, np.ones_like(disc), RimConfig())
+    assert np.count_nonzero(one & limb) > 0 and np.array_equal(both, one)
+    none = recover_rim(obj, left, [other], r_bg, temporal, np.ones_like(disc), RimConfig())
+    assert np.array_equal(none, obj)
