@@ -44,24 +44,27 @@ def test_small_candidates_are_verified_only_where_a_track_is_predicted() -> None
 
 
 def test_the_temporal_background_is_not_updated_about_an_object() -> None:
-    """B learns everywhere but on an object and a margin of max(2, 4 % of its rows) px about it: an outline
-    that missed a rim must not teach B the object (it would show as a ghost where the object was)."""
+    """B learns everywhere but on an object and a margin of max(2, 6 % of its rows) px about it, past its
+    box where the box is tight: an outline that missed a rim must not teach B the object (it would show as
+    a ghost where the object was)."""
     sim = SimRig(get_scenario("walk"), seed=0)
     pipe = Pipeline(sim.rig)
     pipe.learn_background(sim.background())
     sub = pipe.subtractor
     frame = sim.step().frame
     before = sub.left_background(frame.gimbal)[0].copy()  # type: ignore[index]
-    box = (200, 100, 300, 400)  # an object of 300 rows: a margin of 12 px
+    box = (200, 100, 300, 400)
     mask = np.zeros((300, 100), bool)
-    mask[50:250, 30:70] = True
+    mask[50:250, 30:70] = True  # 200 rows: a margin of 12 px
+    tight = (400, 150, 440, 350)  # a box no larger than its mask: the margin reaches past it
     bright = StereoFrame(frame.index, np.full_like(frame.left, 250), frame.right, frame.t_left, frame.t_right,
                          frame.gimbal)
     for _ in range(24):  # one stripe a frame: every row once
-        sub.update_left_background(bright, [(box, mask)], 1.0)
+        sub.update_left_background(bright, [(box, mask), (tight, np.ones((200, 40), bool))], 1.0)
     changed = sub.left_background(frame.gimbal)[0] != before  # type: ignore[index]
     inner = changed[100:400, 200:300]
     assert not inner[50:250, 30 - 11:70 + 11].any()  # the object and 11 px beside it
     assert not inner[50 - 11:250 + 11, 30:70].any()  # and above and below it
     assert inner[50:250, 30 - 14].all() and inner[50:250, 70 + 14].all()  # 14 px off it: learnt
-    assert changed[:, :150].all()  # far from it: learnt
+    assert not changed[150:350, 400 - 11:440 + 11].any() and changed[150:350, 400 - 14].all()
+    assert changed[:, :150].all()  # far from them: learnt

@@ -119,10 +119,10 @@ def test_without_the_temporal_model_the_stereo_background_holds_all_but_the_shad
     assert xs.size > 20 and xs.max() < 60  # the shadow side only: left of the disc's centre column
 
 
-def test_a_limb_at_another_depth_of_the_object_joins_on_the_picture_that_matches_it() -> None:
-    """The object is matched at several of its depths (the right image at d and d (1 ± slant)): a limb
-    joins where any of them matches it better than the background; on a picture that matches nowhere
-    it does not."""
+def test_the_object_cost_is_the_least_over_its_pictures() -> None:
+    """The object is matched on several pictures (RimRecovery: the right image at d and d (1 ± slant)): a
+    limb joins where any of them matches it better than the background; on a picture that matches
+    nowhere it does not."""
     left, r_obj, r_bg, temporal, disc, limb = _scene(limb_amp=10.0)
     obj = disc & ~limb
     rng = np.random.default_rng(7)

@@ -37,15 +37,27 @@ def paint_masks(masks: list[tuple[Box, NDArray[np.bool_]]], row0: int, shape: tu
     return out
 
 
-MARGIN_REL = 0.04  # of an object's rows: the margin about it the temporal background is not updated in
+# of an object's rows: the margin about it the temporal background is not updated in. 4 % made endless:body
+# worse than 6 % (identity switches 8 against 4, azimuth RMSE against the seen surface 0.268 against
+# 0.147°); the other bodies differ by under 0.01° between the two
+MARGIN_REL = 0.06
 
 
-def object_margin(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
-    """An object's mask grown by max(2, MARGIN_REL x its rows) px (a disc): what the temporal background
-    leaves alone about it (its box is larger than the mask by the detector's margin, which this stays in)."""
-    r = max(2, int(round(MARGIN_REL * mask.shape[0])))
+def object_margin(box: Box, mask: NDArray[np.bool_], size: tuple[int, int]) -> tuple[Box, NDArray[np.bool_]]:
+    """An object's mask (over `box`) grown by max(2, MARGIN_REL x the rows it spans) px (a disc), over its
+    box grown by as much and clipped to the image (`size`: width, height): what the temporal background
+    leaves alone about it."""
+    rows = np.flatnonzero(mask.any(axis=1))
+    if rows.size == 0:
+        return box, mask
+    r = max(2, int(round(MARGIN_REL * (rows[-1] - rows[0] + 1))))
     disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
-    return np.asarray(cv2.dilate(mask.astype(np.uint8), disc) > 0)
+    grown = cv2.dilate(cv2.copyMakeBorder(mask.astype(np.uint8), r, r, r, r, cv2.BORDER_CONSTANT, value=0), disc)
+    x0, y0, x1, y1 = box
+    w, h = size
+    gx0, gy0, gx1, gy1 = max(x0 - r, 0), max(y0 - r, 0), min(x1 + r, w), min(y1 + r, h)
+    crop = grown[gy0 - (y0 - r):gy1 - (y0 - r), gx0 - (x0 - r):gx1 - (x0 - r)]
+    return (gx0, gy0, gx1, gy1), np.asarray(crop > 0)
 
 
 @dataclass(frozen=True)
@@ -257,7 +269,8 @@ class StereoSubtractor:
         y0, y1 = k * h // stripes, (k + 1) * h // stripes
         self.left_learnt[self._pose(frame.gimbal)][y0:y1] += 1
         cur = frame.left[y0:y1].astype(np.float32) * np.float32(1.0 / max(gain, 1e-3))
-        keep = paint_masks([(b, object_margin(m)) for b, m in objects], y0, (y1 - y0, bg.shape[1])) if objects else None
+        grown = [object_margin(b, m, (bg.shape[1], h)) for b, m in objects]
+        keep = paint_masks(grown, y0, (y1 - y0, bg.shape[1])) if objects else None
         a = np.float32(alpha)
         new_dev = dev[y0:y1] + a * (np.abs(cur - bg[y0:y1]) - dev[y0:y1])  # D ← D + α(|Γ/g - B| - D)
         new_bg = bg[y0:y1] + a * (cur - bg[y0:y1])  # B ← B + α(Γ/g - B)

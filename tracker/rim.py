@@ -93,6 +93,8 @@ def recover_rim(obj: BoolA, left: U8, right_obj: Sequence[U8], right_bg: U8, tem
     background's; temporal_bg g B; allowed where pixels may join (the background known and still, no
     other object's)."""
     band_k = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * cfg.band_px + 1, 2 * cfg.band_px + 1))
+    if not ((cv2.dilate(obj.view(np.uint8), band_k) > 0) & ~obj & allowed).any():
+        return obj  # nowhere to grow: no costs to work out
     win = (cfg.window_px, cfg.window_px)
     shift = np.ones(win, np.uint8)
 
@@ -117,7 +119,10 @@ def recover_rim(obj: BoolA, left: U8, right_obj: Sequence[U8], right_bg: U8, tem
         n, labels = cv2.connectedComponents((obj | join).view(np.uint8), connectivity=8)
         keep = np.bincount(labels[obj], minlength=n) > 0  # the components that hold the object
         keep[0] = False
-        obj = np.asarray(keep[labels])
+        grown = np.asarray(keep[labels])
+        if np.array_equal(grown, obj):
+            return obj  # what matches touches the object nowhere more
+        obj = grown
     return obj
 
 
@@ -145,8 +150,8 @@ class RimRecovery:
         sx0, sy0, sx1, sy1 = max(bx - m, 0), max(by - m, 0), min(bx + bw + m, w), min(by + bh + m, h)
         x0, y0, x1, y1 = box[0] + sx0, box[1] + sy0, box[0] + sx1, box[1] + sy1
         right_obj = []  # the right image at the object's disparity and at its slant's (d (1 ± slant))
-        for dd in (d, d * (1.0 - self.cfg.slant), d * (1.0 + self.cfg.slant)):
-            ur, vr = self.rect.right_at((x0, y0, x1, y1), dd)
+        for k in ((0.0, -self.cfg.slant, self.cfg.slant) if self.cfg.slant else (0.0,)):
+            ur, vr = self.rect.right_at((x0, y0, x1, y1), d * (1.0 + k))
             right_obj.append(np.asarray(cv2.remap(frame.right, ur, vr, cv2.INTER_LINEAR,
                                                   borderMode=cv2.BORDER_REPLICATE), np.uint8))
         right_bg = cv2.remap(frame.right, cm.map_x[sy0:sy1, sx0:sx1], cm.map_y[sy0:sy1, sx0:sx1],

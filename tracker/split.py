@@ -106,10 +106,10 @@ def same_body(a: BoolA, d_a: float, b: BoolA, d_b: float) -> bool:
     """Whether region b (box pixels, disparity d_b px) is a part of the body of region a (d_a): their
     disparities differ by less than the rival gap of own_pixels (max(MIN_GAP_PX, MIN_GAP_REL d)) and b lies
     within max(PART_GAP_MIN_PX, PART_GAP_REL h) px of a, or, the smaller one's middle column within the
-    other's columns, as far sideways and PART_STACK_REL h rows above or below it, or, the smaller one under
-    1/PART_INSIDE_SHARE of the other's pixels with its middle column within the other's columns, within
-    PART_STACK_REL h rows of the other's rows; h the rows the taller of the two spans, whichever was found
-    first (a head verified before its body is as much a part of it as after)."""
+    other's columns, as far sideways and s = max(that gap, PART_STACK_REL h) rows above or below it, or,
+    the smaller one under 1/PART_INSIDE_SHARE of the other's pixels with its middle column within the
+    other's columns, within s rows of the other's rows; h the rows the taller of the two spans, whichever
+    was found first (a head verified before its body is as much a part of it as after)."""
     if abs(d_a - d_b) >= max(MIN_GAP_PX, MIN_GAP_REL * max(d_a, d_b)):
         return False
     rows, rows_b = np.flatnonzero(a.any(axis=1)), np.flatnonzero(b.any(axis=1))
@@ -122,14 +122,14 @@ def same_body(a: BoolA, d_a: float, b: BoolA, d_b: float) -> bool:
     # rectangle holds the disc of radius gap, so one dilation decides
     small, big = (a, b) if np.count_nonzero(a) < np.count_nonzero(b) else (b, a)
     cols, cols_big = np.flatnonzero(small.any(axis=0)), np.flatnonzero(big.any(axis=0))
-    rows_s, rows_g = np.flatnonzero(small.any(axis=1)), np.flatnonzero(big.any(axis=1))
+    rows_s, rows_g = (rows, rows_b) if small is a else (rows_b, rows)
     stack = max(gap, int(round(PART_STACK_REL * h)))
-    if (np.count_nonzero(small) * PART_INSIDE_SHARE < np.count_nonzero(big)
-            and cols_big[0] <= (cols[0] + cols[-1]) / 2.0 <= cols_big[-1]
+    middle_within = bool(cols_big[0] <= (cols[0] + cols[-1]) / 2.0 <= cols_big[-1])
+    if (middle_within and np.count_nonzero(small) * PART_INSIDE_SHARE < np.count_nonzero(big)
             and rows_g[0] - stack <= rows_s[-1] and rows_s[0] <= rows_g[-1] + stack):
         return True  # a small part within the body's rows grown by `stack`
-    if cols_big[0] <= (cols[0] + cols[-1]) / 2.0 <= cols_big[-1]:
-        k = np.ones((2 * max(gap, int(round(PART_STACK_REL * h))) + 1, 2 * gap + 1), np.uint8)
+    if middle_within:
+        k = np.ones((2 * stack + 1, 2 * gap + 1), np.uint8)
     else:
         k = np.asarray(cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * gap + 1, 2 * gap + 1)), np.uint8)
     return bool(np.any((cv2.dilate(a.view(np.uint8), k) > 0) & b))

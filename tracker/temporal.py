@@ -61,6 +61,10 @@ class TemporalConfig:
     learnt_updates: int = 3
     right_seen_share: float = 0.5
 
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.right_seen_share <= 1.0:
+            raise ValueError(f"right_seen_share must be in 0..1, got {self.right_seen_share}")
+
 
 def global_gain(key: U8, bg: F32) -> float | None:
     """g = median of Γ / B over grid cells whose background is not dark (B > 8); None with too few."""
@@ -258,8 +262,10 @@ class TemporalDetector:
         d_med = float(np.median(cm.disparity[known])) if np.any(known) else d_bg
         if fine.disparity < d_med - max(cfg.behind_tolerance_px, 3.0 * fine.sigma):
             return None  # behind the known background: background uncovered, not an object
+        # clear of the background (the median the test above takes), yet the right camera sees nothing
+        # there: a false match
         if not self._near(fine.disparity, d_med) and not self._right_sees(frame, box, obj, fine.disparity):
-            return None  # clear of the background, yet the right camera sees nothing there: a false match
+            return None
         # eq. (10) in rectified coordinates, pixels weighted by their area: Σ a x / Σ a, Σ a y / Σ a
         sx, sy, sa, _ = cv2.mean(self.verifier.rect.area_moments[y0:y1, x0:x1], mask=m8)
         return Blob(box, obj, area, c_raw, np.array([sx / sa, sy / sa]), fine.disparity, fine.sigma, d_bg,

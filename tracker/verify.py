@@ -56,6 +56,7 @@ _MATCH_HALF_SLANT = (12, 8)  # the same when the larger ones match nowhere (slan
 # weighted ZNCC a region's match needs: a whole object scores 0.95-0.99; a sliver beside an occluder that
 # catches the occluder's edge scores lower and would give a wrong disparity
 _MIN_SCORE = 0.8
+_PART_TRIES = 2  # regions of a box verified as parts of a body found before (tracker.split.same_body)
 _SEARCH_RADIUS = 4  # px about a disparity that refining from failed to match (Verifier.search_radius)
 _TAKEN = np.ones((5, 5), np.uint8)
 
@@ -78,15 +79,15 @@ def _taken(blob: Blob, changed: BoolA | None) -> BoolA:
     return _grown(m8 | shadow)
 
 
-def _part_of(found: list[Blob], region: BoolA, area: int, min_area: int) -> Blob | None:
+def _part_of(found: list[Blob], region: BoolA, area: int, min_part_px: int) -> Blob | None:
     """The object found before of which a region too small to be a second object lies where a part of
-    its body would (split.same_body at the object's own disparity), or None (or when under min_area px)."""
-    if area < min_area:
+    its body would (split.same_body at the object's own disparity), or None (or when under min_part_px)."""
+    if area < min_part_px:
         return None
     return next((f for f in found if same_body(f.mask, f.disparity, region, f.disparity)), None)
 
 
-def found_pixels(found: list[Blob]) -> BoolA | None:
+def _found_pixels(found: list[Blob]) -> BoolA | None:
     """The pixels (grown by two) of the objects found before in a box, or None: not the background of a
     region verified after them, so left out of its temporal outline's gain. Parts of the same body too:
     a region beside a bright torso whose ring took the torso in got g 1.28 where the light had not
@@ -124,18 +125,20 @@ class Verifier:
                           cfg.epsilon, np.maximum(self.sub.floor_at(box), cm.floor))
         found: list[Blob] = []
         free = np.ones(m_raw.shape, bool)  # pixels no object found so far explains
-        min_area = cfg.min_area_px
-        for _ in range(max_objects + 2):  # two more for regions that are parts of a body found
-            if int(np.count_nonzero(m_raw)) < cfg.min_area_px:
+        min_area, min_part = cfg.min_area_px, 4 * cfg.min_area_px
+        tries, part_tries = max_objects, _PART_TRIES  # regions verified as objects, and as parts of one
+        while tries > 0 and len(found) < max_objects:
+            if int(np.count_nonzero(m_raw)) < (min(min_area, min_part) if found else min_area):
                 break
             # where the object overlaps its own ghost, Γ and Θ both show the object and may agree: holes
             m_left = largest_component(m_raw, close=True)
             n_left = int(np.count_nonzero(m_left))
             # a second object in the box must be substantial (min_area), but a part of a body found before
             # (a head past the neck's gap) only has to be a part: it is verified at the body's disparity
-            part_of = _part_of(found, m_left, n_left, 4 * cfg.min_area_px) if n_left < min_area else None
+            part_of = _part_of(found, m_left, n_left, min_part) if n_left < min_area and part_tries else None
             if n_left < min_area and part_of is None:
                 break
+            tries, part_tries = (tries - 1, part_tries) if part_of is None else (tries, part_tries - 1)
             hint = part_of.disparity if part_of is not None else nearest_hint(hints, m_left, box)
             around = hints_around(hints, m_left, box)
             new_later = hint is None and may_search is not None and not may_search()
@@ -158,8 +161,6 @@ class Verifier:
             min_area = max(min_area, 4 * cfg.min_area_px, blob.area // 10)
             taken = _taken(blob, changed)
             m_raw, free = m_raw & ~taken, free & ~taken
-            if len(found) == max_objects:
-                break
         return found
 
     def _too_small_to_be_new(self, area: int, hint: float | None) -> bool:
@@ -176,7 +177,7 @@ class Verifier:
         cameras still, the box's pixels unlike the temporal background (|Γ - g B| > ε + 3 g D).
         around: the predicted disparities of the tracks about the region (regions.hints_around); with more
         than one, a tracked object's outline keeps only its pixels that match best at its own (tracker.split).
-        found: the objects found before in the box (those at another depth stay out of the outline's gain)."""
+        found: the objects found before in the box (they stay out of the outline's gain)."""
         cfg = self.cfg
         around = around or []
         x0, y0, x1, y1 = box
@@ -188,7 +189,7 @@ class Verifier:
             bg, dev = model
             obj, gain, changed = temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1],
                                                    dev[y0:y1, x0:x1], np.zeros_like(m_left), m_left & free,
-                                                   cfg.epsilon, found_pixels(found or []))
+                                                   cfg.epsilon, _found_pixels(found or []))
             if len(around) > 1:  # other tracks predicted about the region: keep the pixels at this one's d
                 obj = own_pixels(self.rect, frame, box, obj, d_hint, around, cfg.min_area_px)
             d0 = d_hint
@@ -202,7 +203,7 @@ class Verifier:
                 bg, dev = model
                 obj, gain, changed = temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1],
                                                        dev[y0:y1, x0:x1], obj, either & free, cfg.epsilon,
-                                                       found_pixels(found or []))
+                                                       _found_pixels(found or []))
         fine = self.match_object(frame, box, obj, d0, self.search_radius(d_hint))
         if fine is None:
             return None
