@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tracker.detect import Candidates
+from tracker.detect import Candidates, object_margin, paint_masks
 from tracker.frames import GimbalState, StereoFrame
 from tracker.pipeline import Pipeline
 from tracker.sim.scenarios import SimRig, get_scenario
@@ -68,3 +68,21 @@ def test_the_temporal_background_is_not_updated_about_an_object() -> None:
     assert inner[50:250, 30 - 14].all() and inner[50:250, 70 + 14].all()  # 14 px off it: learnt
     assert not changed[150:350, 400 - 11:440 + 11].any() and changed[150:350, 400 - 14].all()
     assert changed[:, :150].all()  # far from them: learnt
+
+
+def test_an_objects_margin_worked_out_a_stripe_at_a_time_is_the_whole_one() -> None:
+    """object_margin dilates only the mask rows that reach the stripe asked for: stripe by stripe it paints
+    what it paints over the whole image (here for masks cut by the image's edges too)."""
+    rng = np.random.default_rng(0)
+    size = (640, 480)
+    for box in [(0, 0, 120, 300), (500, 200, 640, 480), (300, 100, 320, 124)]:
+        mask = rng.random((box[3] - box[1], box[2] - box[0])) < 0.2
+        whole = object_margin(box, mask, size, (0, 480))
+        assert whole is not None
+        want = paint_masks([whole], 0, (480, 640))
+        for k in range(24):
+            a, b = k * 20, (k + 1) * 20
+            part = object_margin(box, mask, size, (a, b))
+            got = np.zeros((20, 640), bool) if part is None else paint_masks([part], a, (20, 640))
+            assert np.array_equal(got, want[a:b])
+    assert object_margin((0, 0, 10, 10), np.zeros((10, 10), bool), size, (0, 480)) is None

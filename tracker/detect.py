@@ -43,21 +43,29 @@ def paint_masks(masks: list[tuple[Box, NDArray[np.bool_]]], row0: int, shape: tu
 MARGIN_REL = 0.06
 
 
-def object_margin(box: Box, mask: NDArray[np.bool_], size: tuple[int, int]) -> tuple[Box, NDArray[np.bool_]]:
-    """An object's mask (over `box`) grown by max(2, MARGIN_REL x the rows it spans) px (a disc), over its
-    box grown by as much and clipped to the image (`size`: width, height): what the temporal background
-    leaves alone about it."""
-    rows = np.flatnonzero(mask.any(axis=1))
-    if rows.size == 0:
-        return box, mask
-    r = max(2, int(round(MARGIN_REL * (rows[-1] - rows[0] + 1))))
-    disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
-    grown = cv2.dilate(cv2.copyMakeBorder(mask.astype(np.uint8), r, r, r, r, cv2.BORDER_CONSTANT, value=0), disc)
+def object_margin(box: Box, mask: NDArray[np.bool_], size: tuple[int, int], rows: tuple[int, int]
+                  ) -> tuple[Box, NDArray[np.bool_]] | None:
+    """An object's mask (over `box`) grown by r = max(2, MARGIN_REL x the rows it spans) px (a disc), over
+    its box grown by r and clipped to the image (`size`: width, height) and to the image rows `rows` (a, b):
+    what the temporal background leaves alone about it there. Only the mask's rows within r of those are
+    dilated (the background is updated a stripe at a time). None where the mask is empty or its grown box
+    misses the rows."""
+    span = np.flatnonzero(mask.any(axis=1))
+    if span.size == 0:
+        return None
+    r = max(2, int(round(MARGIN_REL * (span[-1] - span[0] + 1))))
     x0, y0, x1, y1 = box
     w, h = size
-    gx0, gy0, gx1, gy1 = max(x0 - r, 0), max(y0 - r, 0), min(x1 + r, w), min(y1 + r, h)
-    crop = grown[gy0 - (y0 - r):gy1 - (y0 - r), gx0 - (x0 - r):gx1 - (x0 - r)]
-    return (gx0, gy0, gx1, gy1), np.asarray(crop > 0)
+    a, b = max(rows[0], y0 - r, 0), min(rows[1], y1 + r, h)
+    if a >= b:
+        return None
+    ma, mb = max(a - r, y0), min(b + r, y1)  # the mask's rows that reach rows a..b
+    disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
+    sub = mask[ma - y0:mb - y0].astype(np.uint8)
+    grown = cv2.dilate(cv2.copyMakeBorder(sub, r, r, r, r, cv2.BORDER_CONSTANT, value=0), disc)
+    gx0, gx1 = max(x0 - r, 0), min(x1 + r, w)  # grown's row 0 is image row ma - r, its column 0 x0 - r
+    crop = grown[a - (ma - r):b - (ma - r), gx0 - (x0 - r):gx1 - (x0 - r)]
+    return (gx0, a, gx1, b), np.asarray(crop > 0)
 
 
 @dataclass(frozen=True)
@@ -269,8 +277,8 @@ class StereoSubtractor:
         y0, y1 = k * h // stripes, (k + 1) * h // stripes
         self.left_learnt[self._pose(frame.gimbal)][y0:y1] += 1
         cur = frame.left[y0:y1].astype(np.float32) * np.float32(1.0 / max(gain, 1e-3))
-        grown = [object_margin(b, m, (bg.shape[1], h)) for b, m in objects]
-        keep = paint_masks(grown, y0, (y1 - y0, bg.shape[1])) if objects else None
+        grown = [g for b, m in objects if (g := object_margin(b, m, (bg.shape[1], h), (y0, y1))) is not None]
+        keep = paint_masks(grown, y0, (y1 - y0, bg.shape[1])) if grown else None
         a = np.float32(alpha)
         new_dev = dev[y0:y1] + a * (np.abs(cur - bg[y0:y1]) - dev[y0:y1])  # D ← D + α(|Γ/g - B| - D)
         new_bg = bg[y0:y1] + a * (cur - bg[y0:y1])  # B ← B + α(Γ/g - B)
