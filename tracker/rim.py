@@ -93,7 +93,8 @@ def recover_rim(obj: BoolA, left: U8, right_obj: Sequence[U8], right_bg: U8, tem
     background's; temporal_bg g B; allowed where pixels may join (the background known and still, no
     other object's)."""
     band_k = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * cfg.band_px + 1, 2 * cfg.band_px + 1))
-    if not ((cv2.dilate(obj.view(np.uint8), band_k) > 0) & ~obj & allowed).any():
+    band = (cv2.dilate(obj.view(np.uint8), band_k) > 0) & ~obj & allowed  # the first round's
+    if not band.any():
         return obj  # nowhere to grow: no costs to work out
     win = (cfg.window_px, cfg.window_px)
     shift = np.ones(win, np.uint8)
@@ -110,9 +111,8 @@ def recover_rim(obj: BoolA, left: U8, right_obj: Sequence[U8], right_bg: U8, tem
     inside = np.zeros_like(obj)
     inside[by:by + bh, bx:bx + bw] = True
     for r in range(cfg.rounds):
-        band = (cv2.dilate(obj.view(np.uint8), band_k) > 0) & ~obj & allowed
-        if r:
-            band &= inside
+        if r:  # the rounds after the first: from what joined, within the outline's box
+            band = (cv2.dilate(obj.view(np.uint8), band_k) > 0) & ~obj & allowed & inside
         join = band & better
         if not join.any():
             return obj

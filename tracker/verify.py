@@ -138,7 +138,10 @@ class Verifier:
             part_of = _part_of(found, m_left, n_left, min_part) if n_left < min_area and part_tries else None
             if n_left < min_area and part_of is None:
                 break
-            tries, part_tries = (tries - 1, part_tries) if part_of is None else (tries, part_tries - 1)
+            if part_of is None:
+                tries -= 1
+            else:
+                part_tries -= 1
             hint = part_of.disparity if part_of is not None else nearest_hint(hints, m_left, box)
             around = hints_around(hints, m_left, box)
             new_later = hint is None and may_search is not None and not may_search()
