@@ -105,7 +105,8 @@ class Verifier:
     """Turns candidate boxes into verified Blobs (or nothing)."""
 
     def __init__(self, sub: StereoSubtractor, rect: Rectifier, rim: RimConfig | None = DEFAULT_RIM):
-        """rim: how the outline's rim is recovered by stereo with the cameras still (None: it is not)."""
+        """rim: how the outline's rim is recovered by stereo, the cameras still or moving (None: it is
+        not)."""
         self.sub = sub
         self.rect = rect
         self.cfg = sub.cfg
@@ -213,6 +214,8 @@ class Verifier:
         if self.rim is not None and model is not None and changed is not None:  # cameras still (the model
             # drew the outline, so `changed` is known): the rim eq. (9) and the model missed
             obj = self.rim.recover(frame, box, cm, obj, fine.disparity, gain, model, free & ~changed)
+        elif self.rim is not None and model is None:  # cameras moving: the parts eq. (9) missed
+            obj = self.rim.recover_moving(frame, box, cm, obj, fine.disparity, free)
         m8 = obj.view(np.uint8)
         area, c_box = mask_centroid(m8)
         c_raw = c_box + (x0, y0)  # eq. (10), c(i, j) = the object mask
