@@ -136,14 +136,14 @@ def recover_rim(obj: BoolA, left: U8, right_obj: Sequence[U8], right_bg: U8, tem
     c_o = np.minimum.reduce([cost(r) for r in right_obj])  # the object at whichever of its depths fits
     c_b = np.minimum(cost(right_bg), cost(temporal_bg))
     better = c_o + n_w * cfg.margin < c_b
-    return _grow(obj, band, allowed, lambda _: better, cfg)
+    return _grow(obj, band, allowed, lambda _, b: b & better, cfg)
 
 
-def _grow(obj: BoolA, band: BoolA, allowed: BoolA, joins: Callable[[BoolA], BoolA], cfg: RimConfig,
+def _grow(obj: BoolA, band: BoolA, allowed: BoolA, joins: Callable[[BoolA, BoolA], BoolA], cfg: RimConfig,
           keys: bool = False) -> BoolA:
     """Rounds of growth from the object (cfg.rounds; cfg.key_rounds for recover_rim_keys): the pixels of
     the band (the first round's; then within band_px of the object, and of its outline's box but for
-    recover_rim_keys) where joins(object) holds and that stay 8-connected to the object join it."""
+    recover_rim_keys) where joins(object, band) holds and that stay 8-connected to the object join it."""
     band_k = _band_kernel(cfg)
     bx, by, bw, bh = cv2.boundingRect(obj.view(np.uint8))
     inside = np.ones_like(obj) if keys else np.zeros_like(obj)
@@ -151,7 +151,7 @@ def _grow(obj: BoolA, band: BoolA, allowed: BoolA, joins: Callable[[BoolA], Bool
     for r in range(cfg.key_rounds if keys else cfg.rounds):
         if r:  # the rounds after the first: from what joined, within the outline's box
             band = (cv2.dilate(obj.view(np.uint8), band_k) > 0) & ~obj & allowed & inside
-        join = band & joins(obj)
+        join = joins(obj, band)
         if not join.any():
             return obj
         n, labels = cv2.connectedComponents((obj | join).view(np.uint8), connectivity=8)
@@ -189,23 +189,26 @@ def recover_rim_keys(obj: BoolA, left: U8, right_obj: Sequence[U8], right_bg: U8
     diffs = [_absdiff(left, r) for r in right_obj]
     c_o = np.minimum.reduce([_cost(a, win) for a in diffs])
     matches = (c_o * 4 <= n_w * epsilon) & (np.minimum.reduce(diffs) <= epsilon)
+    if not (band & matches).any():
+        return obj  # nothing beside the object matches it: no background costs to work out
     c_s, c_r = _cost(_absdiff(left, right_bg), win), _cost(_absdiff(right_obj[0], left_bg), win)
     if temporal_bg is not None:  # cameras still: the temporal picture explains the background too
         c_t = _cost(_absdiff(left, temporal_bg), win)
         c_s, c_r = np.minimum(c_s, c_t), np.minimum(c_r, c_t)
     by_left, by_right = c_o + n_w * cfg.key_margin < c_s, c_o + n_w * cfg.key_margin < c_r
-    h, w = obj.shape
-    rows = np.arange(h)[:, None]
+    w = obj.shape[1]
     step = np.rint(shift).astype(np.int64)
-    ahead, behind = np.arange(w)[None, :] + step, np.arange(w)[None, :] - step
-    in_a, in_b = (ahead >= 0) & (ahead < w), (behind >= 0) & (behind < w)
-    ahead, behind = np.clip(ahead, 0, w - 1), np.clip(behind, 0, w - 1)
 
-    def joins(o: BoolA) -> BoolA:
+    def joins(o: BoolA, band: BoolA) -> BoolA:  # worked out at the band's matching pixels only
+        ys, xs = np.nonzero(band & matches)
         near = cv2.dilate(o.view(np.uint8), _ROW3) > 0  # a pixel's tolerance along the row
-        left_ok = by_left | (in_a & near[rows, ahead])  # the left key's test says object, or cannot be made
-        right_ok = by_right | (in_b & near[rows, behind])
-        return np.asarray(matches & left_ok & right_ok)
+        ahead, behind = xs + step[ys, xs], xs - step[ys, xs]
+        # each key's test says object, or cannot be made: it lands on the object itself
+        left_ok = by_left[ys, xs] | ((ahead < w) & near[ys, np.minimum(ahead, w - 1)])
+        right_ok = by_right[ys, xs] | ((behind >= 0) & near[ys, np.maximum(behind, 0)])
+        out = np.zeros_like(o)
+        out[ys[left_ok & right_ok], xs[left_ok & right_ok]] = True
+        return out
 
     return _grow(obj, band, allowed, joins, cfg, keys=True)
 
@@ -240,46 +243,35 @@ class RimRecovery:
         self.rect = rect
         self.epsilon = epsilon
 
-    def recover(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap, obj: BoolA, d: float, gain: float,
-                model: tuple[F32, F32], free: BoolA) -> BoolA:
+    def recover(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap, obj: BoolA, d: float, free: BoolA,
+                gain: float = 1.0, model: tuple[F32, F32] | None = None) -> BoolA:
         """The object's mask (bool, over the box) with its rim recovered, worked out over its bounding box
-        grown by the band and the window. d: its disparity (px); cm: the background's correspondences over
-        the box; model: the left temporal background B and its deviation D (full image) at global gain g =
-        `gain`; free: where it may grow (no other object's pixels, none the temporal outline left out as
-        changed). Pixels whose background moves (3 g D ≥ ε: foliage) do not join: no hypothesis holds."""
+        grown by the band and the window: recover_rim with the cameras still (`model` given), then
+        recover_rim_keys. d: its disparity (px); cm: the background's correspondences over the box; model:
+        the left temporal background B and its deviation D (full image) at global gain g = `gain`, None
+        while the cameras move; free: where it may grow (no other object's pixels, none the temporal
+        outline left out as changed). Pixels whose background moves (3 g D ≥ ε: foliage) do not join: no
+        hypothesis holds. The pictures are sampled once for both."""
         (sx0, sy0, sx1, sy1), (x0, y0, x1, y1), right_obj, right_bg = self._pictures(frame, box, cm, obj, d)
-        bg, dev = model[0][y0:y1, x0:x1], model[1][y0:y1, x0:x1]
+        left = frame.left[y0:y1, x0:x1]
         allowed = cm.valid[sy0:sy1, sx0:sx1] & free[sy0:sy1, sx0:sx1]
-        allowed &= np.float32(3.0 * gain) * dev < np.float32(self.epsilon)
-        g_bg = np.asarray(cv2.convertScaleAbs(bg, alpha=gain), np.uint8)  # g B, rounded to grey levels
-        out = obj.copy()
-        out[sy0:sy1, sx0:sx1] = recover_rim(obj[sy0:sy1, sx0:sx1], frame.left[y0:y1, x0:x1],
-                                            right_obj, right_bg, g_bg, allowed, self.cfg)
-        return out
-
-    def recover_keys(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap, obj: BoolA, d: float,
-                       free: BoolA, gain: float = 1.0, model: tuple[F32, F32] | None = None) -> BoolA:
-        """recover_rim_keys for an object verified in a box: as `recover`; the shift is d minus the
-        background's disparity; gain and model (the temporal background and deviation) with the cameras
-        still, None while they move."""
-        (sx0, sy0, sx1, sy1), (x0, y0, x1, y1), right_obj, right_bg = self._pictures(frame, box, cm, obj, d)
-        shift = np.float32(d) - cm.disparity[sy0:sy1, sx0:sx1]
-        # where the background lies about as deep as the object (the ground at a walker's feet), the
-        # object's pictures match it as well: no test tells them apart there
-        allowed = cm.valid[sy0:sy1, sx0:sx1] & free[sy0:sy1, sx0:sx1]
-        allowed &= shift > np.float32(self.cfg.slant * d + 1.0)
-        g_bg = None
+        part, g_bg = obj[sy0:sy1, sx0:sx1], None
         if model is not None:
             bg, dev = model[0][y0:y1, x0:x1], model[1][y0:y1, x0:x1]
             allowed &= np.float32(3.0 * gain) * dev < np.float32(self.epsilon)
-            g_bg = np.asarray(cv2.convertScaleAbs(bg, alpha=gain), np.uint8)
+            g_bg = np.asarray(cv2.convertScaleAbs(bg, alpha=gain), np.uint8)  # g B, rounded to grey levels
+            part = recover_rim(part, left, right_obj, right_bg, g_bg, allowed, self.cfg)
+        shift = np.float32(d) - cm.disparity[sy0:sy1, sx0:sx1]
+        # where the background lies about as deep as the object (the ground at a walker's feet), the
+        # object's pictures match it as well: no test tells them apart there
+        allowed &= shift > np.float32(self.cfg.slant * d + 1.0)
         xs = np.arange(x0, x1, dtype=np.float32)[None, :] - shift
         ys = np.repeat(np.arange(y0, y1, dtype=np.float32)[:, None], x1 - x0, axis=1)
-        left_bg = cv2.remap(frame.left, xs, ys, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        left_bg = np.asarray(cv2.remap(frame.left, xs, ys, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE),
+                             np.uint8)
         out = obj.copy()
-        out[sy0:sy1, sx0:sx1] = recover_rim_keys(obj[sy0:sy1, sx0:sx1], frame.left[y0:y1, x0:x1], right_obj,
-                                                   right_bg, np.asarray(left_bg, np.uint8), shift, allowed,
-                                                   self.cfg, self.epsilon, g_bg)
+        out[sy0:sy1, sx0:sx1] = recover_rim_keys(part, left, right_obj, right_bg, left_bg, shift, allowed,
+                                                 self.cfg, self.epsilon, g_bg)
         return out
 
     def _pictures(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap, obj: BoolA, d: float

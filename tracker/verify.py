@@ -222,10 +222,9 @@ class Verifier:
             return None
         if self.rim is not None and model is not None and changed is not None:  # cameras still (the model
             # drew the outline, so `changed` is known): the rim eq. (9) and the model missed
-            obj = self.rim.recover(frame, box, cm, obj, fine.disparity, gain, model, free & ~changed)
-            obj = self.rim.recover_keys(frame, box, cm, obj, fine.disparity, free & ~changed, gain, model)
+            obj = self.rim.recover(frame, box, cm, obj, fine.disparity, free & ~changed, gain, model)
         elif self.rim is not None and model is None:  # cameras moving: where eq. (9) could not tell
-            obj = self.rim.recover_keys(frame, box, cm, obj, fine.disparity, free)
+            obj = self.rim.recover(frame, box, cm, obj, fine.disparity, free)
         m8 = obj.view(np.uint8)
         area, c_box = mask_centroid(m8)
         c_raw = c_box + (x0, y0)  # eq. (10), c(i, j) = the object mask
