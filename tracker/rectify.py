@@ -99,6 +99,17 @@ class Rectifier:
         vr = cv2.remap(self.maps[1][1], qx, qy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
         return np.asarray(ur, np.float32), np.asarray(vr, np.float32)
 
+    def left_along(self, box: tuple[int, int, int, int], shift: F32) -> tuple[F32, F32]:
+        """Raw left position (x, y; float32 (h, w)) of the point `shift` px (float32 (h, w)) along the
+        rectified row of each pixel of a raw-left box (x0, y0, x1, y1): the left rectification map sampled at
+        (x_rect + shift, y_rect). With lens distortion a rectified row is curved in the raw image."""
+        x0, y0, x1, y1 = box
+        rc = self.rect_of_raw[0][y0:y1, x0:x1]
+        qx, qy = rc[..., 0] + shift, np.ascontiguousarray(rc[..., 1])
+        ux = cv2.remap(self.maps[0][0], qx, qy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        uy = cv2.remap(self.maps[0][1], qx, qy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        return np.asarray(ux, np.float32), np.asarray(uy, np.float32)
+
     def rect_to_rig(self, x: float, y: float, d: float) -> F64:
         """Rectified left point (x, y) with disparity d (px) -> rig-frame point (3,) in metres.
 

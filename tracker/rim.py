@@ -55,7 +55,9 @@ on its own, not only better than the background) and where each key's test says 
 test by default (its background is hidden behind the object) but fails the right key's, which compares
 one and the same point of the background. Where the background lies about as deep as the object (the
 ground at a walker's feet) no test tells them apart, and nothing joins. The rounds (`key_rounds`) are not
-kept to the outline's box: a shaded cap lies beyond it.
+kept to the outline's box, a shaded cap lying beyond it, but to the pictures worked on (band_px +
+window_px beyond it). Δd is taken along the rectified row (with lens distortion a curved raw row: 2 px
+off at Δd = 40 px near the image's edge on the simulated rig).
 
 Measured on the nine `NAME:body` and nine `NAME:plate` scenarios. While the cameras move (the still
 scenarios unchanged): manoeuvre:body pixel F1 0.882 -> 0.985, azimuth RMSE 0.122 -> 0.019° and
@@ -87,6 +89,7 @@ from tracker.rectify import Rectifier
 BoolA = NDArray[np.bool_]
 U8 = NDArray[np.uint8]
 F32 = NDArray[np.float32]
+I32 = NDArray[np.int32]
 Box = tuple[int, int, int, int]
 
 
@@ -97,7 +100,9 @@ class RimConfig:
     grey levels per pixel of W (mean absolute difference); rounds: how many times the band is grown from
     what joined (the rounds after the first within the outline's box); slant: the object is also matched at
     d (1 ± slant), the depths of its parts that lie off its matched surface. key_rounds, key_margin:
-    the rounds and the margin of recover_rim_keys (its rounds are not kept to the outline's box)."""
+    the rounds and the margin of recover_rim_keys (its rounds are not kept to the outline's box, only to
+    the pictures: RimRecovery works band_px + window_px beyond the box, joining up to half a window from
+    the pictures' edge)."""
 
     band_px: int = 3
     window_px: int = 5
@@ -111,8 +116,8 @@ class RimConfig:
         if (not (1 <= self.window_px <= 15 and self.window_px % 2 == 1) or self.band_px < 1 or self.margin < 0
                 or min(self.rounds, self.key_rounds) < 1 or self.key_margin < 0
                 or not 0.0 <= self.slant < 0.5):
-            raise ValueError(f"rim window_px must be odd in 1..15, band_px and (moving_)rounds >= 1, "
-                             f"(moving_)margin >= 0 and slant in [0, 0.5), got {self.window_px}, "
+            raise ValueError(f"rim window_px must be odd in 1..15, band_px and (key_)rounds >= 1, "
+                             f"(key_)margin >= 0 and slant in [0, 0.5), got {self.window_px}, "
                              f"{self.band_px}, {self.rounds}, {self.key_rounds}, {self.margin}, "
                              f"{self.key_margin}, {self.slant}")
 
@@ -149,7 +154,7 @@ def _grow(obj: BoolA, band: BoolA, allowed: BoolA, joins: Callable[[BoolA, BoolA
     inside = np.ones_like(obj) if keys else np.zeros_like(obj)
     inside[by:by + bh, bx:bx + bw] = True
     for r in range(cfg.key_rounds if keys else cfg.rounds):
-        if r:  # the rounds after the first: from what joined, within the outline's box
+        if r:  # the rounds after the first: from what joined (within the outline's box but for the keys')
             band = (cv2.dilate(obj.view(np.uint8), band_k) > 0) & ~obj & allowed & inside
         join = joins(obj, band)
         if not join.any():
@@ -164,22 +169,26 @@ def _grow(obj: BoolA, band: BoolA, allowed: BoolA, joins: Callable[[BoolA, BoolA
     return obj
 
 
-def recover_rim_keys(obj: BoolA, left: U8, right_obj: Sequence[U8], right_bg: U8, left_bg: U8, shift: F32,
-                       allowed: BoolA, cfg: RimConfig, epsilon: int, temporal_bg: U8 | None = None) -> BoolA:
+def recover_rim_keys(obj: BoolA, left: U8, right_obj: Sequence[U8], right_bg: U8, left_bg: U8, ahead: I32,
+                     behind: I32, allowed: BoolA, cfg: RimConfig, epsilon: int, temporal_bg: U8 | None = None
+                     ) -> BoolA:
     """The object's mask with the parts recovered that eq. (9) passed as background where its tests could
-    not be made. All (h, w) over one box of the raw left image, as recover_rim; shift: Δd = d - d_bg (px);
-    left_bg: the left image Δd to the left of each pixel, Γ(x - Δd), what eq. (9) with the right image as
-    key compares the right image at the object's disparity, Θ(d), with. A pixel joins where the object's
-    pictures match it, over its best window (C_o ≤ n_W ε / 4) and on its own (|Γ - Θ(d)| ≤ ε), and where
-    each key's background test says object or cannot be made (see the module's docstring):
+    not be made. All (h, w) over one box of the raw left image, as recover_rim; ahead, behind: (h, w, 2)
+    row and column (in the box) of the pixel Δd = d - d_bg px to the right, and to the left, of each pixel
+    along its rectified row (`along_rows` for an undistorted rig); left_bg: the left image at `behind`,
+    Γ(x - Δd), what eq. (9) with the right image as key compares the right image at the object's disparity,
+    Θ(d), with. A pixel joins where the object's pictures match it, over its best window (C_o ≤ n_W ε / 4)
+    and on its own (|Γ - Θ| ≤ ε for one of them), and where each key's background test says object or
+    cannot be made (see the module's docstring):
     - left key: C_o + n_W margin < C_s = Σ_W |Γ - Θ(d_bg)|, unless the pixel Δd to its right is the
       object's (the right camera sees the object where this pixel's background would be: C_s compares the
       object with itself, as over a smooth ball's face);
     - right key: C_o + n_W margin < C_r = Σ_W |Θ(d) - Γ(x - Δd)|, unless the pixel Δd to its left is the
       object's. The background beside the object that the right camera cannot see (its occlusion shadow,
       Δd wide on its left) passes the first test by default and fails this one.
-    temporal_bg: g B with the cameras still (None while they move): each test's background cost is then
-    the lesser of the stereo one and C_t (a fringe on smooth ground matches the background in both)."""
+    A test counts as not made only where that pixel lies at least one column away on its side (Δd ≥ 1
+    px). temporal_bg: g B with the cameras still (None while they move): each test's background cost is
+    then the lesser of the stereo one and C_t (a fringe on smooth ground matches the background in both)."""
     band = cv2.dilate(obj.view(np.uint8), _band_kernel(cfg)) > 0
     band &= ~obj & allowed
     if not band.any():
@@ -196,21 +205,39 @@ def recover_rim_keys(obj: BoolA, left: U8, right_obj: Sequence[U8], right_bg: U8
         c_t = _cost(_absdiff(left, temporal_bg), win)
         c_s, c_r = np.minimum(c_s, c_t), np.minimum(c_r, c_t)
     by_left, by_right = c_o + n_w * cfg.key_margin < c_s, c_o + n_w * cfg.key_margin < c_r
-    w = obj.shape[1]
-    step = np.rint(shift).astype(np.int64)
+
+    def lands_on(near: BoolA, at: I32, ys: NDArray[np.intp], xs: NDArray[np.intp], side: int) -> BoolA:
+        r, c = at[ys, xs, 0], at[ys, xs, 1]
+        ok = (r >= 0) & (r < near.shape[0]) & (c >= 0) & (c < near.shape[1]) & ((c - xs) * side >= 1)
+        return np.asarray(ok & near[np.clip(r, 0, near.shape[0] - 1), np.clip(c, 0, near.shape[1] - 1)])
 
     def joins(o: BoolA, band: BoolA) -> BoolA:  # worked out at the band's matching pixels only
         ys, xs = np.nonzero(band & matches)
         near = cv2.dilate(o.view(np.uint8), _ROW3) > 0  # a pixel's tolerance along the row
-        ahead, behind = xs + step[ys, xs], xs - step[ys, xs]
         # each key's test says object, or cannot be made: it lands on the object itself
-        left_ok = by_left[ys, xs] | ((ahead < w) & near[ys, np.minimum(ahead, w - 1)])
-        right_ok = by_right[ys, xs] | ((behind >= 0) & near[ys, np.maximum(behind, 0)])
+        ok = by_left[ys, xs] | lands_on(near, ahead, ys, xs, 1)
+        ok &= by_right[ys, xs] | lands_on(near, behind, ys, xs, -1)
         out = np.zeros_like(o)
-        out[ys[left_ok & right_ok], xs[left_ok & right_ok]] = True
+        out[ys[ok], xs[ok]] = True
         return out
 
     return _grow(obj, band, allowed, joins, cfg, keys=True)
+
+
+def along_rows(shape: tuple[int, int], shift: F32) -> tuple[I32, I32]:
+    """recover_rim_keys's `ahead` and `behind` for an undistorted rig whose rectified rows are the image's:
+    (h, w, 2) row and column of the pixel rint(shift) px to the right, and to the left, of each pixel."""
+    h, w = shape
+    rows = np.broadcast_to(np.arange(h)[:, None], (h, w))
+    cols = np.broadcast_to(np.arange(w)[None, :], (h, w))
+    step = np.rint(shift).astype(np.int32)
+    return (np.stack([rows, cols + step], axis=-1).astype(np.int32),
+            np.stack([rows, cols - step], axis=-1).astype(np.int32))
+
+
+def _in_part(x: F32, y: F32, part: Box) -> I32:
+    """(h, w, 2) row and column, in the part (x0, y0, x1, y1), of raw positions x, y (nearest pixel)."""
+    return np.stack([np.rint(y) - part[1], np.rint(x) - part[0]], axis=-1).astype(np.int32)
 
 
 _ROW3 = np.ones((1, 3), np.uint8)
@@ -250,8 +277,8 @@ class RimRecovery:
         recover_rim_keys. d: its disparity (px); cm: the background's correspondences over the box; model:
         the left temporal background B and its deviation D (full image) at global gain g = `gain`, None
         while the cameras move; free: where it may grow (no other object's pixels, none the temporal
-        outline left out as changed). Pixels whose background moves (3 g D ≥ ε: foliage) do not join: no
-        hypothesis holds. The pictures are sampled once for both."""
+        outline left out as changed). With the cameras still, pixels whose background moves (3 g D ≥ ε:
+        foliage) do not join: no hypothesis holds. The pictures are sampled once for both."""
         (sx0, sy0, sx1, sy1), (x0, y0, x1, y1), right_obj, right_bg = self._pictures(frame, box, cm, obj, d)
         left = frame.left[y0:y1, x0:x1]
         allowed = cm.valid[sy0:sy1, sx0:sx1] & free[sy0:sy1, sx0:sx1]
@@ -265,13 +292,17 @@ class RimRecovery:
         # where the background lies about as deep as the object (the ground at a walker's feet), the
         # object's pictures match it as well: no test tells them apart there
         allowed &= shift > np.float32(self.cfg.slant * d + 1.0)
-        xs = np.arange(x0, x1, dtype=np.float32)[None, :] - shift
-        ys = np.repeat(np.arange(y0, y1, dtype=np.float32)[:, None], x1 - x0, axis=1)
-        left_bg = np.asarray(cv2.remap(frame.left, xs, ys, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE),
+        # nor where a window would reach past the pictures (the sums there see a mirrored border)
+        half = self.cfg.window_px // 2
+        allowed[:half] = allowed[-half:] = allowed[:, :half] = allowed[:, -half:] = False
+        sub = (x0, y0, x1, y1)
+        bx, by = self.rect.left_along(sub, -shift)  # Δd to the left along the rectified row, in raw pixels
+        left_bg = np.asarray(cv2.remap(frame.left, bx, by, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE),
                              np.uint8)
+        fx, fy = self.rect.left_along(sub, shift)
         out = obj.copy()
-        out[sy0:sy1, sx0:sx1] = recover_rim_keys(part, left, right_obj, right_bg, left_bg, shift, allowed,
-                                                 self.cfg, self.epsilon, g_bg)
+        out[sy0:sy1, sx0:sx1] = recover_rim_keys(part, left, right_obj, right_bg, left_bg, _in_part(fx, fy, sub),
+                                                 _in_part(bx, by, sub), allowed, self.cfg, self.epsilon, g_bg)
         return out
 
     def _pictures(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap, obj: BoolA, d: float

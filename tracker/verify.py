@@ -25,7 +25,8 @@ from tracker.rectify import Rectifier
 from tracker.regions import background_disparity, hints_around, mask_centroid, nearest_hint, row_thirds
 from tracker.rim import DEFAULT_RIM, RimConfig, RimRecovery
 from tracker.split import join, own_pixels, same_body
-from tracker.stereo import RegionMatch, match_region, refine_region
+from tracker.stereo import RegionMatch
+from tracker.strips import MIN_SCORE, Strips
 
 U8 = NDArray[np.uint8]
 F64 = NDArray[np.float64]
@@ -51,12 +52,8 @@ class Blob:
     gain: float = 1.0
 
 
-_CORE = np.ones((3, 3), np.uint8)
 _MATCH_HALF = (24, 16)  # half width and height (px) of the largest window matched
 _MATCH_HALF_SLANT = (12, 8)  # the same when the larger ones match nowhere (slanted faces, near)
-# weighted ZNCC a region's match needs: a whole object scores 0.95-0.99; a sliver beside an occluder that
-# catches the occluder's edge scores lower and would give a wrong disparity
-_MIN_SCORE = 0.8
 _PART_TRIES = 2  # regions of a box verified as parts of a body found before (tracker.split.same_body)
 _SEARCH_RADIUS = 4  # px about a disparity that refining from failed to match (Verifier.search_radius)
 _TAKEN = np.ones((5, 5), np.uint8)
@@ -188,21 +185,9 @@ class Verifier:
         x0, y0, x1, y1 = box
         gain, changed, matched = 1.0, None, None
         model = self.sub.left_background(frame.gimbal)
-        if model is not None and d_hint is not None:
-            # a tracked object, cameras still: the temporal model draws the outline inside the left-key
-            # region (object and shadow), at the strict threshold (moving background there stays out); its
-            # disparity is matched there. The outline placed for the centroid is drawn inside the right
-            # key's region as well: where the object overlaps its own ghost in the left key, a smooth face
-            # compared with itself passes eq. (9) (walk:body against the seen surface: azimuth RMSE 0.113 ->
-            # 0.086°, elevation 0.406 -> 0.305°; matching the disparity over that outline instead made
-            # endless:body's range RMSE 0.616 -> 0.639 m and lost a far head over a hedge in 49 frames)
-            keyed = self._temporal_outline(frame, box, model, m_left & free, found)
-            wide = self._temporal_outline(frame, box, model, (m_left | self.right_key_at(frame, box, d_hint)) & free,
-                                          found)
-            matched, (obj, gain, changed) = keyed[0], wide
-            if len(around) > 1:  # other tracks predicted about the region: keep the pixels at this one's d
-                matched = own_pixels(self.rect, frame, box, matched, d_hint, around, cfg.min_area_px)
-                obj = own_pixels(self.rect, frame, box, obj, d_hint, around, cfg.min_area_px)
+        if model is not None and d_hint is not None:  # a tracked object, cameras still
+            obj, matched, gain, changed = self._tracked_outline(frame, box, model, m_left, d_hint, free,
+                                                                around, found)
             d0 = d_hint
         else:
             # a new object, or the cameras move: verification by warping in both directions
@@ -211,10 +196,7 @@ class Verifier:
                 return None
             obj, either, d0 = stereo
             if model is not None:  # cameras still: the temporal model draws the exact outline
-                bg, dev = model
-                obj, gain, changed = temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1],
-                                                       dev[y0:y1, x0:x1], obj, either & free, cfg.epsilon,
-                                                       _found_pixels(found or []))
+                obj, gain, changed = self._temporal_outline(frame, box, model, obj, either & free, found)
         fine = None if matched is None else self.match_object(frame, box, matched, d0, self.search_radius(d_hint))
         if fine is None:
             fine = self.match_object(frame, box, obj, d0, self.search_radius(d_hint))
@@ -225,6 +207,8 @@ class Verifier:
             obj = self.rim.recover(frame, box, cm, obj, fine.disparity, free & ~changed, gain, model)
         elif self.rim is not None and model is None:  # cameras moving: where eq. (9) could not tell
             obj = self.rim.recover(frame, box, cm, obj, fine.disparity, free)
+        if not obj.any():
+            return None
         m8 = obj.view(np.uint8)
         area, c_box = mask_centroid(m8)
         c_raw = c_box + (x0, y0)  # eq. (10), c(i, j) = the object mask
@@ -236,13 +220,37 @@ class Verifier:
         return Blob(box, obj, area, c_raw, np.array([sx / sa, sy / sa]), fine.disparity, fine.sigma, d_bg,
                     fine.score, gain), changed
 
-    def _temporal_outline(self, frame: StereoFrame, box: Box, model: tuple[F32, F32], region: BoolA,
-                          found: list[Blob] | None) -> tuple[BoolA, float, BoolA]:
-        """masks.temporal_outline of a tracked object inside `region` of the box (no core)."""
+    def _tracked_outline(self, frame: StereoFrame, box: Box, model: tuple[F32, F32], m_left: BoolA, d_hint: float,
+                         free: BoolA, around: list[float], found: list[Blob] | None
+                         ) -> tuple[BoolA, BoolA, float, BoolA]:
+        """A tracked object's outline with the cameras still, the part of it its disparity is matched on, the
+        outline's gain and the box's changed pixels. The temporal model draws the part inside the left-key
+        region (object and shadow), at the strict threshold (moving background there stays out); the
+        outline is drawn inside the right key's region as well: where the object overlaps its own ghost in
+        the left key, a smooth face compared with itself passes eq. (9) (walk:body against the seen
+        surface: azimuth RMSE 0.113 -> 0.090°, elevation 0.406 -> 0.307°; matching the disparity over the
+        whole outline instead made endless:body's range RMSE 0.616 -> 0.639 m and lost a far head over a
+        hedge in 49 frames). An outline that does not reach the part (the right key's region about another
+        object) is the part."""
+        matched = self._temporal_outline(frame, box, model, None, m_left & free, found)[0]
+        region = (m_left | self.right_key_at(frame, box, d_hint)) & free
+        obj, gain, changed = self._temporal_outline(frame, box, model, None, region, found)
+        if len(around) > 1:  # other tracks predicted about the region: keep the pixels at this one's d
+            matched = own_pixels(self.rect, frame, box, matched, d_hint, around, self.cfg.min_area_px)
+            obj = own_pixels(self.rect, frame, box, obj, d_hint, around, self.cfg.min_area_px)
+        if matched.any() and not (obj & matched).any():
+            obj = matched
+        return obj, matched, gain, changed
+
+    def _temporal_outline(self, frame: StereoFrame, box: Box, model: tuple[F32, F32], core: BoolA | None,
+                          region: BoolA, found: list[Blob] | None) -> tuple[BoolA, float, BoolA]:
+        """masks.temporal_outline of an object inside `region` of the box (core: none, or the pixels both
+        keys agree are the object)."""
         x0, y0, x1, y1 = box
         bg, dev = model
         return temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1], dev[y0:y1, x0:x1],
-                                np.zeros_like(region), region, self.cfg.epsilon, _found_pixels(found or []))
+                                np.zeros_like(region) if core is None else core, region, self.cfg.epsilon,
+                                _found_pixels(found or []))
 
     def search_radius(self, d_hint: float | None) -> int:
         """How far (px) about a track's predicted disparity d the search goes when refining from it fails:
@@ -281,7 +289,7 @@ class Verifier:
         if strips is None:
             return []
         return part_disparities(strips.left, strips.right, strips.core(blob.mask), strips.off, blob.disparity,
-                                _MIN_SCORE)
+                                MIN_SCORE)
 
     def _outline_stereo(self, frame: StereoFrame, box: Box, m_left: BoolA,
                         d_hint: float | None) -> tuple[BoolA, BoolA, float] | None:
@@ -314,7 +322,7 @@ class Verifier:
         return None
 
     def _strips(self, frame: StereoFrame, box: Box, region: BoolA, d_hint: float | None,
-                half: tuple[int, int] = _MATCH_HALF) -> _Strips | None:
+                half: tuple[int, int] = _MATCH_HALF) -> Strips | None:
         """Rectified left/right strips around a region's rows, wide enough for the disparity search; the
         window matched is the region's central 2 half[0] x 2 half[1] px at most."""
         rect, cfg = self.rect, self.cfg
@@ -345,7 +353,7 @@ class Verifier:
             return None
         sx0 = rx0 - d_hi - 2
         box_r = (sx0, ry0, rx1 + 2, ry1)
-        return _Strips(rect, (x0, y0), (rx0, ry0, rx1, ry1), rect.rectify(frame.left, 0, box_r),
+        return Strips(rect, (x0, y0), (rx0, ry0, rx1, ry1), rect.rectify(frame.left, 0, box_r),
                        rect.rectify(frame.right, 1, box_r), rx0 - sx0, d_hi, clipped)
 
     def right_key_at(self, frame: StereoFrame, box: Box, d: float) -> BoolA:
@@ -366,44 +374,3 @@ class Verifier:
         sampled = cv2.remap(m_right, (ur - bx0).astype(np.float32), (vr - by0).astype(np.float32),
                             cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
         return np.asarray(sampled >= 0.5)
-
-
-@dataclass(frozen=True)
-class _Strips:
-    """Rectified strips of both images over the rows of a region: the region's rectified window is
-    (rx0, ry0, rx1, ry1); it starts at column `off` of the strips; disparities up to d_hi fit."""
-
-    rect: Rectifier
-    origin: tuple[int, int]
-    window: Box
-    left: U8
-    right: U8
-    off: int
-    d_hi: int
-    clipped: bool = False  # the image's left edge cut the search range short
-
-    def core(self, region: BoolA) -> U8:
-        """The region (raw-left mask with its box's origin) over the rectified window, (h, n) uint8 0/1,
-        shrunk by about a pixel so that no background next to the outline enters a match."""
-        x0, y0 = self.origin
-        rx0, ry0, rx1, ry1 = self.window
-        mx, my = self.rect.maps[0]
-        mmx = mx[ry0:ry1, rx0:rx1] - np.float32(x0)
-        mmy = my[ry0:ry1, rx0:rx1] - np.float32(y0)
-        wgt = cv2.remap(region.astype(np.float32), mmx, mmy, cv2.INTER_LINEAR,
-                        borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
-        core = np.asarray(cv2.erode((wgt > 0.99).astype(np.uint8), _CORE), np.uint8)
-        if int(np.count_nonzero(core)) < 8:
-            core = (wgt > 0.5).astype(np.uint8)
-        return core
-
-    def match(self, region: BoolA, d0: float | None, radius: int) -> RegionMatch | None:
-        """One disparity for the region (raw-left mask with its box's origin), mask-weighted, shrunk by
-        about a pixel so that no background next to the outline enters the match."""
-        core = self.core(region)
-        if d0 is not None:  # a good prior: refine from it, search around it only if that fails
-            fit = refine_region(self.left, self.right, core, self.off, 0, d0, min_score=_MIN_SCORE)
-            if fit is not None:
-                return fit
-        return match_region(self.left, self.right, core, self.off, 0, self.d_hi, d0, search_radius=radius,
-                            min_score=_MIN_SCORE)
