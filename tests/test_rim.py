@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tracker.rim import RimConfig, along_rows, recover_rim, recover_rim_keys
+from tracker.rim import Pictures, RimConfig, along_rows, recover_rim, recover_rim_keys
 
 H, W = 90, 120
 D_OBJ, D_BG = 12, 4  # px: the object's disparity and the background's
@@ -50,6 +50,11 @@ def _scene(limb_amp: float, seed: int = 0, textured: bool = True, wide: bool = F
     return u8(left), u8(right_obj), u8(right_bg), u8(temporal), disc, limb
 
 
+def _pictures(left: np.ndarray, right_obj: list[np.ndarray], right_bg: np.ndarray,
+              temporal: np.ndarray | None) -> Pictures:
+    return Pictures(left, right_obj, right_bg, temporal, RimConfig().window_px)
+
+
 def _missed(left: np.ndarray, temporal: np.ndarray, disc: np.ndarray, eps: int = 12) -> np.ndarray:
     """What the temporal model keeps of the disc: the pixels unlike the background by more than ε."""
     return disc & (np.abs(left.astype(int) - temporal.astype(int)) > eps)
@@ -62,7 +67,7 @@ def test_a_limb_with_the_backgrounds_grey_joins_the_object() -> None:
     left, r_obj, r_bg, temporal, disc, limb = _scene(limb_amp=10.0)
     obj = disc & ~limb
     assert np.count_nonzero(_missed(left, temporal, disc) & limb) < 0.25 * np.count_nonzero(limb)
-    out = recover_rim(obj, left, [r_obj], r_bg, temporal, np.ones_like(disc), RimConfig())
+    out = recover_rim(obj, _pictures(left, [r_obj], r_bg, temporal), np.ones_like(disc), RimConfig())
     assert np.count_nonzero(out & limb) > 0.3 * np.count_nonzero(limb)
     assert not np.any(out & ~disc)
     cx = lambda m: float(np.nonzero(m)[1].mean())  # noqa: E731
@@ -76,10 +81,10 @@ def test_a_limb_wider_than_the_band_inside_the_outlines_box_joins() -> None:
     round (the band alone) 44 %."""
     left, r_obj, r_bg, temporal, disc, limb = _scene(limb_amp=10.0, wide=True)
     obj = disc & ~limb
-    out = recover_rim(obj, left, [r_obj], r_bg, temporal, np.ones_like(disc), RimConfig())
+    out = recover_rim(obj, _pictures(left, [r_obj], r_bg, temporal), np.ones_like(disc), RimConfig())
     assert np.count_nonzero(out & limb) > 0.65 * np.count_nonzero(limb)
     assert not np.any(out & ~disc)
-    once = recover_rim(obj, left, [r_obj], r_bg, temporal, np.ones_like(disc), RimConfig(rounds=1))
+    once = recover_rim(obj, _pictures(left, [r_obj], r_bg, temporal), np.ones_like(disc), RimConfig(rounds=1))
     assert np.count_nonzero(once & limb) < 0.5 * np.count_nonzero(limb)
 
 
@@ -88,7 +93,7 @@ def test_a_whole_outline_is_not_fattened(textured: bool) -> None:
     """A disc seen whole gains at most a few pixels: a centred window beside a bright disc matches the
     disc's disparity better and added about 70 px round this one's perimeter (157 px)."""
     left, r_obj, r_bg, temporal, disc, _ = _scene(limb_amp=25.0, textured=textured)
-    out = recover_rim(disc, left, [r_obj], r_bg, temporal, np.ones_like(disc), RimConfig())
+    out = recover_rim(disc, _pictures(left, [r_obj], r_bg, temporal), np.ones_like(disc), RimConfig())
     assert np.count_nonzero(out & ~disc) <= 8
     assert np.array_equal(out & disc, disc)
 
@@ -98,7 +103,7 @@ def test_pixels_not_allowed_do_not_join() -> None:
     obj = disc & ~limb
     allowed = np.ones_like(disc)
     allowed[:45] = False  # another object's pixels, changed pixels, or a background that moves there
-    out = recover_rim(obj, left, [r_obj], r_bg, temporal, allowed, RimConfig())
+    out = recover_rim(obj, _pictures(left, [r_obj], r_bg, temporal), allowed, RimConfig())
     assert not np.any(out[:45] & ~obj[:45]) and np.any(out[45:] & limb[45:])
 
 
@@ -113,7 +118,7 @@ def test_without_the_temporal_model_the_stereo_background_holds_all_but_the_shad
     the right camera sees the disc in front of): why rim recovery waits for the cameras to stand still."""
     left, r_obj, r_bg, temporal, disc, _ = _scene(limb_amp=25.0)
     useless = (255 - temporal).astype(np.uint8)
-    out = recover_rim(disc, left, [r_obj], r_bg, useless, np.ones_like(disc), RimConfig())
+    out = recover_rim(disc, _pictures(left, [r_obj], r_bg, useless), np.ones_like(disc), RimConfig())
     grown = out & ~disc
     xs = np.nonzero(grown)[1]
     assert xs.size > 20 and xs.max() < 60  # the shadow side only: left of the disc's centre column
@@ -127,10 +132,10 @@ def test_the_object_cost_is_the_least_over_its_pictures() -> None:
     obj = disc & ~limb
     rng = np.random.default_rng(7)
     other = rng.integers(0, 256, r_obj.shape).astype(np.uint8)  # the right image at a depth that fits nothing
-    one = recover_rim(obj, left, [r_obj], r_bg, temporal, np.ones_like(disc), RimConfig())
-    both = recover_rim(obj, left, [other, r_obj], r_bg, temporal, np.ones_like(disc), RimConfig())
+    one = recover_rim(obj, _pictures(left, [r_obj], r_bg, temporal), np.ones_like(disc), RimConfig())
+    both = recover_rim(obj, _pictures(left, [other, r_obj], r_bg, temporal), np.ones_like(disc), RimConfig())
     assert np.count_nonzero(one & limb) > 0 and np.array_equal(both, one)
-    none = recover_rim(obj, left, [other], r_bg, temporal, np.ones_like(disc), RimConfig())
+    none = recover_rim(obj, _pictures(left, [other], r_bg, temporal), np.ones_like(disc), RimConfig())
     assert np.array_equal(none, obj)
 
 
@@ -170,14 +175,14 @@ def test_with_the_cameras_moving_a_smooth_balls_lost_side_is_recovered_and_its_s
     yy, xx = np.mgrid[0:H, 0:W]
     lost = disc & (yy > 55)
     ahead, behind = along_rows(disc.shape, np.full(disc.shape, float(D_OBJ - D_BG), np.float32))
-    out = recover_rim_keys(disc & ~lost, left, [r_obj], r_bg, left_bg, ahead, behind, np.ones_like(disc),
-                           RimConfig(), 12)
+    out = recover_rim_keys(disc & ~lost, _pictures(left, [r_obj], r_bg, None), left_bg, ahead, behind,
+                           np.ones_like(disc), RimConfig(), 12)
     assert np.count_nonzero(out & lost) > 0.9 * np.count_nonzero(lost)
     shadow = shifted & ~disc
     assert np.count_nonzero(out & shadow) <= 3 and np.count_nonzero(out & ~disc) <= 8
     # the still cameras' rule, with no temporal picture that explains anything, recovers little of it
     useless = (255 - left).astype(np.uint8)
-    still = recover_rim(disc & ~lost, left, [r_obj], r_bg, useless, np.ones_like(disc), RimConfig())
+    still = recover_rim(disc & ~lost, _pictures(left, [r_obj], r_bg, useless), np.ones_like(disc), RimConfig())
     assert np.count_nonzero(still & lost) < 0.5 * np.count_nonzero(lost)
 
 
@@ -193,8 +198,8 @@ def test_a_test_counts_as_not_made_only_where_it_lands_a_column_away_on_its_side
     joined = []
     for dd in (8.0, 0.0, -8.0):
         ahead, behind = along_rows(disc.shape, np.full(disc.shape, dd, np.float32))
-        out = recover_rim_keys(disc & ~lost, left, [r_obj], left, r_obj, ahead, behind, np.ones_like(disc),
-                               RimConfig(), 12)
+        out = recover_rim_keys(disc & ~lost, _pictures(left, [r_obj], left, None), r_obj, ahead, behind,
+                               np.ones_like(disc), RimConfig(), 12)
         assert not np.any(out & ~disc)
         joined.append(np.count_nonzero(out & lost))
     assert joined[0] > 0.9 * np.count_nonzero(lost) and joined[1:] == [0, 0]
@@ -209,10 +214,10 @@ def test_with_the_cameras_still_the_temporal_picture_keeps_a_smooth_wall_out() -
     ahead, behind = along_rows(disc.shape, np.full(disc.shape, float(D_OBJ - D_BG), np.float32))
     useless = (255 - left).astype(np.uint8)
     wall = np.where(disc, useless, left).astype(np.uint8)  # the temporal picture: the wall, not the ball
-    free = recover_rim_keys(disc, left, [r_obj], useless, useless, ahead, behind, np.ones_like(disc), RimConfig(),
-                            12)
-    kept = recover_rim_keys(disc, left, [r_obj], useless, useless, ahead, behind, np.ones_like(disc),
-                            RimConfig(), 12, wall)
+    free = recover_rim_keys(disc, _pictures(left, [r_obj], useless, None), useless, ahead, behind,
+                            np.ones_like(disc), RimConfig(), 12)
+    kept = recover_rim_keys(disc, _pictures(left, [r_obj], useless, wall), useless, ahead, behind,
+                            np.ones_like(disc), RimConfig(), 12)
     assert np.count_nonzero(free & ~disc) > 200 and np.count_nonzero(kept & ~disc) <= 8
     assert np.array_equal(kept & disc, disc)
 

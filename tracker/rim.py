@@ -77,6 +77,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from functools import cached_property
 
 import cv2
 import numpy as np
@@ -122,25 +123,59 @@ class RimConfig:
                              f"{self.key_margin}, {self.slant}")
 
 
-def recover_rim(obj: BoolA, left: U8, right_obj: Sequence[U8], right_bg: U8, temporal_bg: U8, allowed: BoolA,
-                cfg: RimConfig) -> BoolA:
-    """The object's mask with its rim recovered. All (h, w) over one box of the raw left image: obj the
-    object's mask; left Γ; right_obj the right image sampled at the object's disparity (and at others of
-    its surface: C_o is the least of their costs), right_bg at the
-    background's; temporal_bg g B; allowed where pixels may join (the background known and still, no
-    other object's)."""
+class Pictures:
+    """What the pixels about an object are compared in, all (h, w) over one box of the raw left image: left
+    Γ; right_obj the right image at the object's disparity d and at others of its surface (d (1 ± slant));
+    right_bg the right image at the background's disparity; temporal_bg g B (None while the cameras move).
+    Their costs Σ_W |Γ - ·| over the best window W (window_px square) that holds each pixel (shiftable
+    windows) are each worked out once, when first asked for: recover_rim and recover_rim_keys ask for the
+    same ones."""
+
+    def __init__(self, left: U8, right_obj: Sequence[U8], right_bg: U8, temporal_bg: U8 | None, window_px: int):
+        self.left, self.right_obj, self.right_bg, self.temporal_bg = left, right_obj, right_bg, temporal_bg
+        self.win = (window_px, window_px)
+
+    def cost(self, a: U8, b: U8) -> NDArray[np.int32]:
+        """Σ_W |a - b| over the best window that holds each pixel."""
+        return _cost(_absdiff(a, b), self.win)
+
+    @cached_property
+    def diffs(self) -> list[U8]:
+        """|Γ - Θ| for each of the object's pictures."""
+        return [_absdiff(self.left, r) for r in self.right_obj]
+
+    @cached_property
+    def c_o(self) -> NDArray[np.int32]:
+        """The object's cost, at whichever of its depths fits."""
+        return np.asarray(np.minimum.reduce([_cost(a, self.win) for a in self.diffs]), np.int32)
+
+    @cached_property
+    def closest(self) -> U8:
+        """The least of |Γ - Θ| over the object's pictures, pixel by pixel."""
+        return np.asarray(np.minimum.reduce(self.diffs), np.uint8)
+
+    @cached_property
+    def c_s(self) -> NDArray[np.int32]:
+        """The cost of the background in the right image, Σ_W |Γ - Θ(d_bg)|."""
+        return self.cost(self.left, self.right_bg)
+
+    @cached_property
+    def c_t(self) -> NDArray[np.int32] | None:
+        """The cost of the temporal picture, Σ_W |Γ - g B| (None while the cameras move)."""
+        return None if self.temporal_bg is None else self.cost(self.left, self.temporal_bg)
+
+
+def recover_rim(obj: BoolA, pictures: Pictures, allowed: BoolA, cfg: RimConfig) -> BoolA:
+    """The object's mask with its rim recovered. obj: the object's mask and allowed where pixels may join
+    (the background known and still, no other object's), over the box of `pictures`, which must hold the
+    temporal picture: a pixel joins where C_o + n_W margin < min(C_s, C_t)."""
+    if pictures.c_t is None:
+        raise ValueError("recover_rim needs the temporal picture (the cameras still)")
     band = (cv2.dilate(obj.view(np.uint8), _band_kernel(cfg)) > 0) & ~obj & allowed  # the first round's
     if not band.any():
         return obj  # nowhere to grow: no costs to work out
-    win = (cfg.window_px, cfg.window_px)
-
-    def cost(other: U8) -> NDArray[np.int32]:  # Σ_W |Γ - other|, the best W that holds p (shiftable windows)
-        return _cost(_absdiff(left, other), win)
-
     n_w = cfg.window_px * cfg.window_px  # the thresholds are per pixel: Σ over W = n_w times the mean
-    c_o = np.minimum.reduce([cost(r) for r in right_obj])  # the object at whichever of its depths fits
-    c_b = np.minimum(cost(right_bg), cost(temporal_bg))
-    better = c_o + n_w * cfg.margin < c_b
+    better = pictures.c_o + n_w * cfg.margin < np.minimum(pictures.c_s, pictures.c_t)
     return _grow(obj, band, allowed, lambda _, b: b & better, cfg)
 
 
@@ -150,9 +185,11 @@ def _grow(obj: BoolA, band: BoolA, allowed: BoolA, joins: Callable[[BoolA, BoolA
     the band (the first round's; then within band_px of the object, and of its outline's box but for
     recover_rim_keys) where joins(object, band) holds and that stay 8-connected to the object join it."""
     band_k = _band_kernel(cfg)
-    bx, by, bw, bh = cv2.boundingRect(obj.view(np.uint8))
-    inside = np.ones_like(obj) if keys else np.zeros_like(obj)
-    inside[by:by + bh, bx:bx + bw] = True
+    inside = np.ones_like(obj)
+    if not keys:
+        bx, by, bw, bh = cv2.boundingRect(obj.view(np.uint8))
+        inside[:] = False
+        inside[by:by + bh, bx:bx + bw] = True
     for r in range(cfg.key_rounds if keys else cfg.rounds):
         if r:  # the rounds after the first: from what joined (within the outline's box but for the keys')
             band = (cv2.dilate(obj.view(np.uint8), band_k) > 0) & ~obj & allowed & inside
@@ -169,11 +206,10 @@ def _grow(obj: BoolA, band: BoolA, allowed: BoolA, joins: Callable[[BoolA, BoolA
     return obj
 
 
-def recover_rim_keys(obj: BoolA, left: U8, right_obj: Sequence[U8], right_bg: U8, left_bg: U8, ahead: I32,
-                     behind: I32, allowed: BoolA, cfg: RimConfig, epsilon: int, temporal_bg: U8 | None = None
-                     ) -> BoolA:
+def recover_rim_keys(obj: BoolA, pictures: Pictures, left_bg: U8, ahead: I32, behind: I32, allowed: BoolA,
+                     cfg: RimConfig, epsilon: int) -> BoolA:
     """The object's mask with the parts recovered that eq. (9) passed as background where its tests could
-    not be made. All (h, w) over one box of the raw left image, as recover_rim; ahead, behind: (h, w, 2)
+    not be made. All (h, w) over the box of `pictures`, as recover_rim; ahead, behind: (h, w, 2)
     row and column (in the box) of the pixel Δd = d - d_bg px to the right, and to the left, of each pixel
     along its rectified row (`along_rows` for an undistorted rig); left_bg: the left image at `behind`,
     Γ(x - Δd), what eq. (9) with the right image as key compares the right image at the object's disparity,
@@ -187,23 +223,20 @@ def recover_rim_keys(obj: BoolA, left: U8, right_obj: Sequence[U8], right_bg: U8
       object's. The background beside the object that the right camera cannot see (its occlusion shadow,
       Δd wide on its left) passes the first test by default and fails this one.
     A test counts as not made only where that pixel lies at least one column away on its side (Δd ≥ 1
-    px). temporal_bg: g B with the cameras still (None while they move): each test's background cost is
-    then the lesser of the stereo one and C_t (a fringe on smooth ground matches the background in both)."""
+    px). With the temporal picture (cameras still) each test's background cost is the lesser of the stereo
+    one and C_t (a fringe on smooth ground matches the background in both)."""
     band = cv2.dilate(obj.view(np.uint8), _band_kernel(cfg)) > 0
     band &= ~obj & allowed
     if not band.any():
         return obj
-    win = (cfg.window_px, cfg.window_px)
     n_w = cfg.window_px * cfg.window_px
-    diffs = [_absdiff(left, r) for r in right_obj]
-    c_o = np.minimum.reduce([_cost(a, win) for a in diffs])
-    matches = (c_o * 4 <= n_w * epsilon) & (np.minimum.reduce(diffs) <= epsilon)
+    c_o = pictures.c_o
+    matches = (c_o * 4 <= n_w * epsilon) & (pictures.closest <= epsilon)
     if not (band & matches).any():
         return obj  # nothing beside the object matches it: no background costs to work out
-    c_s, c_r = _cost(_absdiff(left, right_bg), win), _cost(_absdiff(right_obj[0], left_bg), win)
-    if temporal_bg is not None:  # cameras still: the temporal picture explains the background too
-        c_t = _cost(_absdiff(left, temporal_bg), win)
-        c_s, c_r = np.minimum(c_s, c_t), np.minimum(c_r, c_t)
+    c_s, c_r = pictures.c_s, pictures.cost(pictures.right_obj[0], left_bg)
+    if pictures.c_t is not None:  # cameras still: the temporal picture explains the background too
+        c_s, c_r = np.minimum(c_s, pictures.c_t), np.minimum(c_r, pictures.c_t)
     by_left, by_right = c_o + n_w * cfg.key_margin < c_s, c_o + n_w * cfg.key_margin < c_r
 
     def lands_on(near: BoolA, at: I32, ys: NDArray[np.intp], xs: NDArray[np.intp], side: int) -> BoolA:
@@ -287,7 +320,9 @@ class RimRecovery:
             bg, dev = model[0][y0:y1, x0:x1], model[1][y0:y1, x0:x1]
             allowed &= np.float32(3.0 * gain) * dev < np.float32(self.epsilon)
             g_bg = np.asarray(cv2.convertScaleAbs(bg, alpha=gain), np.uint8)  # g B, rounded to grey levels
-            part = recover_rim(part, left, right_obj, right_bg, g_bg, allowed, self.cfg)
+        pictures = Pictures(left, right_obj, right_bg, g_bg, self.cfg.window_px)
+        if model is not None:
+            part = recover_rim(part, pictures, allowed, self.cfg)
         shift = np.float32(d) - cm.disparity[sy0:sy1, sx0:sx1]
         # where the background lies about as deep as the object (the ground at a walker's feet), the
         # object's pictures match it as well: no test tells them apart there
@@ -301,8 +336,8 @@ class RimRecovery:
                              np.uint8)
         fx, fy = self.rect.left_along(sub, shift)
         out = obj.copy()
-        out[sy0:sy1, sx0:sx1] = recover_rim_keys(part, left, right_obj, right_bg, left_bg, _in_part(fx, fy, sub),
-                                                 _in_part(bx, by, sub), allowed, self.cfg, self.epsilon, g_bg)
+        out[sy0:sy1, sx0:sx1] = recover_rim_keys(part, pictures, left_bg, _in_part(fx, fy, sub),
+                                                 _in_part(bx, by, sub), allowed, self.cfg, self.epsilon)
         return out
 
     def _pictures(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap, obj: BoolA, d: float
