@@ -178,7 +178,7 @@ def _second_peak(r: list[float], k: int) -> float:
     return max(rest) if rest else -1.0
 
 
-def _zncc_weighted(S: NDArray[np.floating], T: NDArray[np.floating], w: NDArray[np.floating]) -> F64:
+def zncc_weighted(S: NDArray[np.floating], T: NDArray[np.floating], w: NDArray[np.floating]) -> F64:
     """Weighted zero-mean normalised cross-correlation of template T (h, n) with weights w (h, n) at every
     column position of strip S (h, m): shape (m - n + 1,), -1 where a window is flat. Direct sums (OpenCV's
     masked TM_CCOEFF_NORMED goes through several full correlations and is slower for small searches)."""
@@ -209,7 +209,7 @@ def match_strip(
     if w is None:
         r = cv2.matchTemplate(S[:, PAD:-PAD], T, cv2.TM_CCOEFF_NORMED)[0].astype(np.float64)
     else:
-        r = _zncc_weighted(S[:, PAD:-PAD], T, w)
+        r = zncc_weighted(S[:, PAD:-PAD], T, w)
     kk = int(np.argmax(r))
     if kk == 0 or kk == span or float(r[kk]) < min_score:
         return None

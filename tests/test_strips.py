@@ -1,0 +1,82 @@
+"""A small region's disparity stands only where its whole outline agrees (tracker.strips.outline_agrees)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tests.test_split import _ideal_rig, _texture
+from tracker import strips as st
+from tracker.rectify import Rectifier
+from tracker.stereo import match_region
+
+FIXTURE = Path(__file__).parent / "fixtures" / "far_head_strips.npz"
+TRUE_D = 6.56  # the head's rectified disparity in that frame (the simulator's truth)
+
+
+def _far_head() -> dict[str, np.ndarray]:
+    """The rectified strips (13 x 34 px) the verifier matched a far walker's head and shoulders on, 27 m
+    away over a hedge (endless:body frame 872, the fine match from the coarse 6.04 px, 4 px either side):
+    left, right, the region's shrunk core and its whole mask over the window (13 x 15 px, from column
+    `off`), d_hi. Written by running the pipeline on the scenario to that frame and saving Strips.match's
+    arguments."""
+    with np.load(FIXTURE) as z:
+        return {k: z[k] for k in z.files}
+
+
+def test_a_far_heads_smooth_inside_matches_far_off_and_its_outline_says_so() -> None:
+    h = _far_head()
+    off, d_hi = int(h["off"]), int(h["d_hi"])
+    core_fit = match_region(h["left"], h["right"], h["core"], off, 0, d_hi, float(h["d0"]), search_radius=4,
+                            min_score=st.MIN_SCORE)
+    assert core_fit is not None and core_fit.disparity > TRUE_D + 2.0  # the core alone: 2.3 px too near
+    assert 2 * int(h["core"].sum()) < int(h["whole"].sum())  # a small region: the check applies
+    assert not st.outline_agrees(h["left"], h["right"], h["whole"], off, d_hi, core_fit.disparity)
+    assert st.outline_agrees(h["left"], h["right"], h["whole"], off, d_hi, TRUE_D)
+
+
+def _strips_over(h: dict[str, np.ndarray], monkeypatch: pytest.MonkeyPatch) -> tuple[st.Strips, np.ndarray]:
+    """The fixture's strips as a Strips on an undistorted rig, its region's core and whole mask those the
+    pipeline had (the lens's rectification shrank the core further than the identity's would)."""
+    n = h["whole"].shape[1]
+    rows, off = h["left"].shape[0], int(h["off"])
+    x0, y0 = 200, 100
+    strips = st.Strips(Rectifier(_ideal_rig()), (x0, y0), (x0, y0, x0 + n, y0 + rows), h["left"], h["right"],
+                       off, int(h["d_hi"]))
+    monkeypatch.setattr(st.Strips, "_core_and_whole", lambda self, region: (h["core"], h["whole"]))
+    return strips, h["whole"].astype(bool)
+
+
+def test_the_match_of_a_small_region_is_dropped_where_its_outline_disagrees(monkeypatch: pytest.MonkeyPatch
+                                                                            ) -> None:
+    h = _far_head()
+    strips, region = _strips_over(h, monkeypatch)
+    assert strips.match(region, float(h["d0"]), 4) is None
+    monkeypatch.setattr(st, "outline_agrees", lambda *a, **k: True)  # without the check: the core's match
+    fit = strips.match(region, float(h["d0"]), 4)
+    assert fit is not None and fit.disparity > TRUE_D + 2.0
+
+
+def test_a_small_textured_region_whose_outline_agrees_keeps_its_match() -> None:
+    # a textured bar 14 x 4 px at disparity 6 over a background at 2: its shrunk core keeps 12 x 2 px of 56
+    left_tex, bar = _texture(8), _texture(9)
+    rows, cols, off, n = 12, 44, 20, 20  # the window: strip columns off .. off + n; the bar from off + 3
+    yy, xx = np.mgrid[0:rows, 0:cols]
+    x_bar = off + 3
+    on = (yy >= 4) & (yy < 8) & (xx >= x_bar) & (xx < x_bar + 14)
+
+    def view(shift_bar: int, shift_bg: int) -> np.ndarray:
+        out = left_tex[yy + 50, xx + 50 + shift_bg].copy()
+        on_r = (yy >= 4) & (yy < 8) & (xx + shift_bar >= x_bar) & (xx + shift_bar < x_bar + 14)
+        out[on_r] = bar[yy + 50, xx + 50 + shift_bar][on_r]
+        return np.asarray(out.clip(0, 255), np.uint8)
+
+    left, right = view(0, 0), view(6, 2)
+    strips = st.Strips(Rectifier(_ideal_rig()), (300, 200), (300, 200, 300 + n, 200 + rows), left, right, off, 12)
+    region = on[:, off:off + n]
+    core = strips.core(region)
+    assert 2 * int(core.sum()) < int(region.sum())
+    fit = strips.match(region, None, 0)
+    assert fit is not None and abs(fit.disparity - 6.0) < 0.2
