@@ -33,8 +33,10 @@ def test_a_far_heads_smooth_inside_matches_far_off_and_its_outline_says_so() -> 
                             min_score=st.MIN_SCORE)
     assert core_fit is not None and core_fit.disparity > TRUE_D + 2.0  # the core alone: 2.3 px too near
     assert 2 * int(h["core"].sum()) < int(h["whole"].sum())  # a small region: the check applies
-    assert not st.outline_agrees(h["left"], h["right"], h["whole"], off, d_hi, core_fit.disparity)
-    assert st.outline_agrees(h["left"], h["right"], h["whole"], off, d_hi, TRUE_D)
+    assert not st.outline_agrees(h["left"], h["right"], h["whole"], off, core_fit.disparity)
+    assert st.outline_agrees(h["left"], h["right"], h["whole"], off, TRUE_D)
+    # at its true disparity the whole region is within 0.05 of its best: a score read one pixel off is not
+    assert st.outline_agrees(h["left"], h["right"], h["whole"], off, TRUE_D, tol=0.05)
 
 
 def _strips_over(h: dict[str, np.ndarray], monkeypatch: pytest.MonkeyPatch) -> tuple[st.Strips, np.ndarray]:

@@ -78,23 +78,26 @@ class Strips:
                                min_score=MIN_SCORE)
         if fit is None or 2 * int(np.count_nonzero(core)) >= int(np.count_nonzero(whole)):
             return fit
-        return fit if outline_agrees(self.left, self.right, whole, self.off, self.d_hi, fit.disparity) else None
+        return fit if outline_agrees(self.left, self.right, whole, self.off, fit.disparity) else None
 
 
-def outline_agrees(left: U8, right: U8, whole: U8, off: int, d_hi: int, d: float, tol: float = AGREE_TOL) -> bool:
+def outline_agrees(left: U8, right: U8, whole: U8, off: int, d: float, tol: float = AGREE_TOL) -> bool:
     """Whether the whole region `whole` ((h, n) 0/1 over the left strip's columns off .. off + n, its
     outline's pixels included) matches at disparity d (px) within `tol` of its best weighted ZNCC over
-    the whole disparities d ± 4 px (up to d_hi). left, right: (h, m) strips, right column off - d seeing
-    what left column off sees at disparity d. The outline's pixels mix the object with the background
-    beside it, so the whole region scores lower than its core where both are right (a far plate: 0.60
-    against 0.88 at 6.4 px); but where the core's best lies far from the whole region's, the whole
-    region's edges, which the core leaves out, say the core matched its smooth inside wrongly (the head
-    above: the core 0.92 at 8.9 px, the whole region 0.47 there and 0.73 at 6)."""
-    n = whole.shape[1]  # r: column j of the right strip <-> disparity off - j
-    r = zncc_weighted(right.astype(np.float32), left[:, off:off + n].astype(np.float32), whole.astype(np.float32))
-    ds = np.arange(max(int(np.floor(d)) - _AGREE_SPAN, 0), min(int(np.ceil(d)) + _AGREE_SPAN, d_hi) + 1)
-    ds = ds[(off - ds >= 0) & (off - ds < r.size)]
-    if ds.size == 0:
-        return True
-    scores = r[off - ds]
+    the whole disparities from floor(d) - 4 to ceil(d) + 4 that the strips hold. left, right: (h, m)
+    strips, right column off - d seeing what left column off sees at disparity d. The outline's pixels
+    mix the object with the background beside it, so the whole region scores lower than its core where
+    both are right (a far plate: 0.60 against 0.88 at 6.4 px); but where the core's best lies far from
+    the whole region's, the whole region's edges, which the core leaves out, say the core matched its
+    smooth inside wrongly (the head above: the core 0.92 at 8.9 px, the whole region 0.47 there and 0.73
+    at 6). False where fewer than two disparities can be tried (nothing to compare with)."""
+    n = whole.shape[1]
+    ds = np.arange(max(int(np.floor(d)) - _AGREE_SPAN, 0), int(np.ceil(d)) + _AGREE_SPAN + 1)
+    ds = ds[(off - ds >= 0) & (off - ds + n <= right.shape[1])]  # right columns off - d .. off - d + n
+    if ds.size < 2:
+        return False
+    j0, j1 = off - int(ds[-1]), off - int(ds[0])  # the right strip's columns, from the largest d
+    r = zncc_weighted(right[:, j0:j1 + n].astype(np.float32), left[:, off:off + n].astype(np.float32),
+                      whole.astype(np.float32))  # r[j - j0]: disparity off - j
+    scores = r[off - ds - j0]
     return float(np.interp(d, ds, scores)) >= float(scores.max()) - tol
