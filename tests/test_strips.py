@@ -4,16 +4,32 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import cv2
 import numpy as np
 import pytest
 
-from tests.test_split import _ideal_rig, _texture
 from tracker import strips as st
+from tracker.geometry import Camera, StereoRig
 from tracker.rectify import Rectifier
 from tracker.stereo import match_region
 
 FIXTURE = Path(__file__).parent / "fixtures" / "far_head_strips.npz"
 TRUE_D = 6.56  # the head's rectified disparity in that frame (the simulator's truth)
+W, H = 640, 480
+
+
+def _ideal_rig() -> StereoRig:
+    """No distortion, parallel cameras 0.3 m apart: the rectified image is the raw one."""
+    K = np.array([[600.0, 0.0, W / 2], [0.0, 600.0, H / 2], [0.0, 0.0, 1.0]])
+    half = np.array([0.15, 0.0, 0.0])
+    return StereoRig(Camera(K, np.zeros(5), (W, H), np.eye(3), -half),
+                     Camera(K.copy(), np.zeros(5), (W, H), np.eye(3), half))
+
+
+def _texture(seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    t = cv2.GaussianBlur(rng.uniform(0, 255, (H, W + 64)).astype(np.float32), (0, 0), 1.5)
+    return np.asarray(cv2.normalize(t, None, 40, 220, cv2.NORM_MINMAX), np.float32)
 
 
 def _far_head() -> dict[str, np.ndarray]:
