@@ -92,22 +92,22 @@ class Rectifier:
     def right_at(self, box: tuple[int, int, int, int], d: float) -> tuple[F32, F32]:
         """Raw right position (x, y; float32 (h, w)) of each pixel of a raw-left box (x0, y0, x1, y1) seen at
         rectified disparity d (px): the right rectification map sampled at (x_rect - d, y_rect)."""
-        x0, y0, x1, y1 = box
-        rc = self.rect_of_raw[0][y0:y1, x0:x1]
-        qx, qy = rc[..., 0] - np.float32(d), np.ascontiguousarray(rc[..., 1])
-        ur = cv2.remap(self.maps[1][0], qx, qy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-        vr = cv2.remap(self.maps[1][1], qx, qy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-        return np.asarray(ur, np.float32), np.asarray(vr, np.float32)
+        return self._along_row(1, box, -np.float32(d))
 
     def left_along(self, box: tuple[int, int, int, int], shift: F32) -> tuple[F32, F32]:
         """Raw left position (x, y; float32 (h, w)) of the point `shift` px (float32 (h, w)) along the
         rectified row of each pixel of a raw-left box (x0, y0, x1, y1): the left rectification map sampled at
         (x_rect + shift, y_rect). With lens distortion a rectified row is curved in the raw image."""
+        return self._along_row(0, box, shift)
+
+    def _along_row(self, side: int, box: tuple[int, int, int, int], shift: F32 | np.float32) -> tuple[F32, F32]:
+        """Camera `side`'s raw position (x, y; float32 (h, w)) at the rectified point `shift` px (scalar or
+        (h, w)) along the row from each pixel of a raw-left box: its map sampled at (x_rect + shift, y_rect)."""
         x0, y0, x1, y1 = box
         rc = self.rect_of_raw[0][y0:y1, x0:x1]
         qx, qy = rc[..., 0] + shift, np.ascontiguousarray(rc[..., 1])
-        ux = cv2.remap(self.maps[0][0], qx, qy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-        uy = cv2.remap(self.maps[0][1], qx, qy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        ux = cv2.remap(self.maps[side][0], qx, qy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        uy = cv2.remap(self.maps[side][1], qx, qy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
         return np.asarray(ux, np.float32), np.asarray(uy, np.float32)
 
     def rect_to_rig(self, x: float, y: float, d: float) -> F64:

@@ -46,11 +46,7 @@ MIN_GAP_REL = 0.2
 def right_at(rect: Rectifier, frame: StereoFrame, box: Box, d: float) -> F32:
     """The right image sampled where each left pixel of `box` would be seen at disparity d (px): the raw
     right position of the rectified point (x_rect - d, y_rect), bilinear; (y1 - y0, x1 - x0) float32."""
-    x0, y0, x1, y1 = box
-    rc = rect.rect_of_raw[0][y0:y1, x0:x1]
-    qx, qy = rc[..., 0] - np.float32(d), np.ascontiguousarray(rc[..., 1])
-    ur = cv2.remap(rect.maps[1][0], qx, qy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-    vr = cv2.remap(rect.maps[1][1], qx, qy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    ur, vr = rect.right_at(box, d)
     return np.asarray(cv2.remap(frame.right.astype(np.float32), ur, vr, cv2.INTER_LINEAR,
                                 borderMode=cv2.BORDER_REPLICATE), np.float32)
 

@@ -105,10 +105,7 @@ def _same_surface(rect: Rectifier, frame: StereoFrame, box: Box, obj: NDArray[np
     shifted by d; its largest component, grown back by two pixels inside the region. What the region
     also holds at another depth (a background uncovered next to the object) drops out."""
     x0, y0, x1, y1 = box
-    rc = rect.rect_of_raw[0][y0:y1, x0:x1]
-    qx, qy = rc[..., 0] - np.float32(d), np.ascontiguousarray(rc[..., 1])
-    ur = cv2.remap(rect.maps[1][0], qx, qy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-    vr = cv2.remap(rect.maps[1][1], qx, qy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    ur, vr = rect.right_at(box, d)
     theta = cv2.remap(frame.right, ur, vr, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
     diff = cv2.blur(cv2.absdiff(frame.left[y0:y1, x0:x1], theta).astype(np.float32), _WIN)
     same = largest_region(obj & (diff <= 2 * eps))
