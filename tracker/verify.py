@@ -198,7 +198,7 @@ class Verifier:
             if model is not None:  # cameras still: the temporal model draws the exact outline
                 obj, gain, changed = self._temporal_outline(frame, box, model, obj, either & free, found)
         fine = None if matched is None else self.match_object(frame, box, matched, d0, self.search_radius(d_hint))
-        if fine is None:
+        if fine is None and (matched is None or not np.array_equal(matched, obj)):  # the same search, not twice
             fine = self.match_object(frame, box, obj, d0, self.search_radius(d_hint))
         if fine is None:
             return None
