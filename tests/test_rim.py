@@ -284,3 +284,12 @@ def test_a_tracked_shaded_square_is_outlined_whole_with_the_cameras_still() -> N
             cover.append(np.count_nonzero(fg & truth) / np.count_nonzero(truth))
             extra += int(np.count_nonzero(fg & ~truth))
     assert np.mean(cover) > 0.99 and min(cover) > 0.98 and extra <= 10
+
+
+def test_the_keys_recovery_keeps_half_a_window_off_the_pictures_edge_and_nothing_for_a_one_pixel_window() -> None:
+    from tracker.rim import _off_edges
+
+    m = np.ones((6, 7), bool)
+    cut = _off_edges(m, 2)
+    assert cut[2:4, 2:5].all() and int(cut.sum()) == 2 * 3
+    assert _off_edges(m, 0).all()  # a 1-px window reaches nothing past its pixel

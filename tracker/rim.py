@@ -268,6 +268,14 @@ def along_rows(shape: tuple[int, int], shift: F32) -> tuple[I32, I32]:
             np.stack([rows, cols - step], axis=-1).astype(np.int32))
 
 
+def _off_edges(mask: BoolA, half: int) -> BoolA:
+    """The mask (h, w) with its outer `half` rows and columns on each side cleared (none for half 0)."""
+    out = np.zeros_like(mask)
+    h, w = mask.shape
+    out[half:h - half, half:w - half] = mask[half:h - half, half:w - half]
+    return out
+
+
 def _in_part(x: F32, y: F32, part: Box) -> I32:
     """(h, w, 2) row and column, in the part (x0, y0, x1, y1), of raw positions x, y (nearest pixel)."""
     return np.stack([np.rint(y) - part[1], np.rint(x) - part[0]], axis=-1).astype(np.int32)
@@ -328,8 +336,7 @@ class RimRecovery:
         # object's pictures match it as well: no test tells them apart there
         allowed &= shift > np.float32(self.cfg.slant * d + 1.0)
         # nor where a window would reach past the pictures (the sums there see a mirrored border)
-        half = self.cfg.window_px // 2
-        allowed[:half] = allowed[-half:] = allowed[:, :half] = allowed[:, -half:] = False
+        allowed = _off_edges(allowed, self.cfg.window_px // 2)
         sub = (x0, y0, x1, y1)
         bx, by = self.rect.left_along(sub, -shift)  # Δd to the left along the rectified row, in raw pixels
         left_bg = np.asarray(cv2.remap(frame.left, bx, by, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE),
