@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tracker.segmentation import HeightHistory, edge_quantisation_px, hull_gap_px
+from tracker.segmentation import HeightHistory, edge_quantisation_px, hull_gap_px, outline_sigma_px
 
 
 def _centroid(m: np.ndarray) -> np.ndarray:
@@ -106,3 +106,23 @@ def test_height_history_takes_half_of_a_piece_lost_or_gained() -> None:
     assert hist.sigma_px(1, 20, 50.0, 20.0) == 0.0
     hist.keep_only([2])
     assert hist.sigma_px(1, 21, 10.0, 20.0) == 0.0
+
+
+def test_an_upright_bodys_hull_gap_counts_along_y_only() -> None:
+    # a walker 40 x 110 px, one arm held out (a notch between it and the torso, to the right): for a person
+    # (tracker.localize.SolidPrior.upright) the notches are the spaces between its limbs and the gap's x
+    # term is left to the prior's upright_x_sigma; flat targets (no prior) and a wide body keep both terms
+    from tracker.localize import SolidPrior
+    from tracker.pipeline import outline_terms_px
+
+    walker = np.zeros((120, 50), bool)
+    walker[5:115, 10:30] = True  # torso and legs
+    walker[70:115, 17:23] = False  # between the legs
+    walker[20:60, 38:42] = True  # the arm
+    walker[20:24, 30:38] = True  # the shoulder
+    edge, gap = outline_sigma_px(walker)
+    assert gap[0] > 0.1 and gap[1] > 0.1
+    assert outline_terms_px(walker, SolidPrior()) == [edge, (0.0, gap[1])]
+    assert outline_terms_px(walker, None) == [edge, gap]
+    car = np.ascontiguousarray(walker.T)  # lying: 120 x 50 px, not upright
+    assert outline_terms_px(car, SolidPrior()) == list(outline_sigma_px(car))

@@ -20,7 +20,9 @@ def _pair(z_m: float, extent_px: tuple[float, float]):  # type: ignore[no-untype
     d = rect.f * rect.rig.baseline / z_m
     args = (np.array([x, y]), d, 0.05, 400, None, (0.0, 0.0), extent_px)
     flat = Localizer(rect).locate(*args)
-    solid = Localizer(rect, solid=SolidPrior(0.5, 0.3, rim_sigma_px=0.0, upright_sigma=0.0)).locate(*args)
+    prior = SolidPrior(0.5, 0.3, rim_sigma_px=0.0, upright_sigma=0.0, upright_ratio=0.5, upright_ratio_sigma=0.3,
+                       upright_x_sigma=0.0)  # an upright body's own terms apart (tested below)
+    solid = Localizer(rect, solid=prior).locate(*args)
     return flat, solid, rect
 
 
@@ -51,7 +53,7 @@ def test_a_solid_bodys_rim_widens_the_centroids_sigma_by_a_side_over_root_two() 
 
     def loc(rim_px: float, extra: tuple[float, float]):  # type: ignore[no-untyped-def]
         prior = SolidPrior(rim_sigma_px=rim_px, upright_sigma=0.0)
-        return Localizer(rect, solid=prior).locate(*base, extra, (40.0, 120.0))
+        return Localizer(rect, solid=prior).locate(*base, extra, (60.0, 80.0))  # not upright
 
     rim = loc(0.5, (0.0, 0.0))
     s = 0.5 / math.sqrt(2.0)
@@ -81,6 +83,43 @@ def test_an_upright_bodys_elevation_sigma_is_at_least_a_share_of_its_height() ->
     for extent in ((60.0, 60.0), (150.0, 55.0)):  # a ball, a car
         assert np.allclose(loc(solid, (0.0, 0.0), extent).cov_world, loc(bare, (0.0, 0.0), extent).cov_world,
                            rtol=1e-12, atol=0.0)
+
+
+def test_an_upright_body_has_its_own_depth_prior() -> None:
+    # a person (height >= 1.5 x width): ρ = upright_ratio ± upright_ratio_sigma of its seen width; a ball
+    # (not upright) the general ρ ± σ_ρ
+    rect = Rectifier(default_rig())
+    d = rect.f * rect.rig.baseline / 10.0
+    args = (np.array([360.0, 220.0]), d, 0.05, 400, None, (0.0, 0.0))
+    prior = SolidPrior(0.5, 0.3, rim_sigma_px=0.0, upright_sigma=0.0, upright_ratio=0.36, upright_ratio_sigma=0.15)
+    c = rect.rig.left.c
+    for extent, ratio, sigma in (((60.0, 165.0), 0.36, 0.15), ((60.0, 60.0), 0.5, 0.3)):
+        flat = Localizer(rect).locate(*args, extent)
+        solid = Localizer(rect, solid=prior).locate(*args, extent)
+        e = 60.0 * float(flat.rig[2]) / rect.f
+        moved = float(np.linalg.norm(solid.rig - c) - np.linalg.norm(flat.rig - c))
+        assert math.isclose(moved, 0.5 * ratio * e, rel_tol=1e-9), (extent, moved)
+        assert math.isclose(solid.sigma_r ** 2, flat.sigma_r ** 2 + (0.5 * sigma * e) ** 2, rel_tol=0.02)
+
+
+def test_an_upright_bodys_azimuth_sigma_is_a_share_of_its_height_in_place_of_the_rims() -> None:
+    # along x a person's 1-σ is upright_x_sigma times its seen height, not rim_sigma_px / √2: as if that
+    # were seen-in-part's extra_px along x, the rim's y term kept
+    rect = Rectifier(default_rig())
+    base = (np.array([380.0, 200.0]), 12.0, 0.05, 400, None)
+    rim = 0.5 / math.sqrt(2.0)
+
+    def loc(prior: SolidPrior, extra: tuple[float, float], extent: tuple[float, float]):  # type: ignore[no-untyped-def]
+        return Localizer(rect, solid=prior).locate(*base, extra, extent)
+
+    person = loc(SolidPrior(upright_sigma=0.0, upright_x_sigma=0.005), (0.0, 0.0), (40.0, 200.0))
+    same = loc(SolidPrior(rim_sigma_px=0.0, upright_sigma=0.0, upright_x_sigma=0.0), (1.0, rim), (40.0, 200.0))
+    assert np.allclose(person.cov_world, same.cov_world, rtol=1e-12, atol=0.0)
+    taller = loc(SolidPrior(upright_sigma=0.0, upright_x_sigma=0.005), (0.0, 0.0), (40.0, 400.0))
+    assert taller.sigma_theta > 1.5 * person.sigma_theta
+    ball = loc(SolidPrior(upright_sigma=0.0, upright_x_sigma=0.005), (0.0, 0.0), (60.0, 60.0))
+    bare = loc(SolidPrior(rim_sigma_px=0.0, upright_sigma=0.0), (rim, rim), (60.0, 60.0))
+    assert np.allclose(ball.cov_world, bare.cov_world, rtol=1e-12, atol=0.0)
 
 
 def test_the_smaller_extent_counts_and_no_extent_or_prior_changes_nothing() -> None:

@@ -263,7 +263,7 @@ class Pipeline:
         its outline (tracker.segmentation); in quadrature, all being independent."""
         others = [e for o in blobs if o is not b for e in object_and_shadow(o.box, o.mask, o.disparity, o.bg_disparity)]
         px, py = self._partly_seen(frame, b, others)
-        terms = list(outline_sigma_px(b.mask))
+        terms = outline_terms_px(b.mask, self.localizer.solid)
         if self.subtractor.left_background(frame.gimbal) is None:
             terms.append(warped_outline_sigma_px(b.mask, self.outline))
         for ox, oy in terms:
@@ -300,6 +300,18 @@ class Pipeline:
             ly, lx = (y0 + s - 1) // s, (x0 + s - 1) // s
             low[ly:ly + sub.shape[0], lx:lx + sub.shape[1]] |= sub.astype(np.uint8)
         return low
+
+
+def outline_terms_px(mask: BoolA, solid: SolidPrior | None) -> list[tuple[float, float]]:
+    """The outline's own terms of the centroid's 1-σ (px, x and y; tracker.segmentation): its whole pixels'
+    and its hull gap's. An upright body's hull gap counts along y only: along x its notches are the spaces
+    between its swinging limbs, which the SolidPrior's upright_x_sigma describes."""
+    edge, (gx, gy) = outline_sigma_px(mask)
+    if solid is not None:
+        _, _, w, h = cv2.boundingRect(mask.view(np.uint8))
+        if solid.upright(w, h):
+            gx = 0.0
+    return [edge, (gx, gy)]
 
 
 def _explained(b: Blob, hints: F64, blobs: list[Blob]) -> bool:
