@@ -109,20 +109,20 @@ def test_height_history_takes_half_of_a_piece_lost_or_gained() -> None:
 
 
 def test_an_upright_bodys_hull_gap_counts_along_y_only() -> None:
-    # a walker 40 x 110 px, one arm held out (a notch between it and the torso, to the right): for a person
-    # (tracker.localize.SolidPrior.upright) the notches are the spaces between its limbs and the gap's x
-    # term is left to the prior's upright_x_sigma; flat targets (no prior) and a wide body keep both terms
+    # a walker 32 px wide and 110 px high, one arm held out (a notch between it and the torso, to the
+    # right): for a person (tracker.localize.SolidPrior.upright) the notches are the spaces between its limbs
+    # and the gap's x term is left to the prior's upright_x_sigma (tracker.pipeline.with_gap_x); flat targets
+    # (no prior) and a body lying on its side (110 px wide, 32 px high) keep it, in quadrature
     from tracker.localize import SolidPrior
-    from tracker.pipeline import outline_terms_px
+    from tracker.pipeline import with_gap_x
 
     walker = np.zeros((120, 50), bool)
     walker[5:115, 10:30] = True  # torso and legs
     walker[70:115, 17:23] = False  # between the legs
     walker[20:60, 38:42] = True  # the arm
     walker[20:24, 30:38] = True  # the shoulder
-    edge, gap = outline_sigma_px(walker)
-    assert gap[0] > 0.1 and gap[1] > 0.1
-    assert outline_terms_px(walker, SolidPrior()) == [edge, (0.0, gap[1])]
-    assert outline_terms_px(walker, None) == [edge, gap]
-    car = np.ascontiguousarray(walker.T)  # lying: 120 x 50 px, not upright
-    assert outline_terms_px(car, SolidPrior()) == list(outline_sigma_px(car))
+    _, (gx, gy) = outline_sigma_px(walker)
+    assert gx > 0.1 and gy > 0.1
+    assert with_gap_x(0.3, gx, SolidPrior(), 32.0, 110.0) == 0.3
+    assert with_gap_x(0.3, gx, None, 32.0, 110.0) == pytest.approx(float(np.hypot(0.3, gx)))
+    assert with_gap_x(0.3, gx, SolidPrior(), 110.0, 32.0) == pytest.approx(float(np.hypot(0.3, gx)))

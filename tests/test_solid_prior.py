@@ -115,11 +115,21 @@ def test_an_upright_bodys_azimuth_sigma_is_a_share_of_its_height_in_place_of_the
     person = loc(SolidPrior(upright_sigma=0.0, upright_x_sigma=0.005), (0.0, 0.0), (40.0, 200.0))
     same = loc(SolidPrior(rim_sigma_px=0.0, upright_sigma=0.0, upright_x_sigma=0.0), (1.0, rim), (40.0, 200.0))
     assert np.allclose(person.cov_world, same.cov_world, rtol=1e-12, atol=0.0)
+    cut = loc(SolidPrior(upright_sigma=0.0, upright_x_sigma=0.005), (0.7, 0.0), (40.0, 200.0))  # both count
+    same = loc(SolidPrior(rim_sigma_px=0.0, upright_sigma=0.0, upright_x_sigma=0.0), (math.hypot(1.0, 0.7), rim),
+               (40.0, 200.0))
+    assert np.allclose(cut.cov_world, same.cov_world, rtol=1e-12, atol=0.0)
     taller = loc(SolidPrior(upright_sigma=0.0, upright_x_sigma=0.005), (0.0, 0.0), (40.0, 400.0))
     assert taller.sigma_theta > 1.5 * person.sigma_theta
     ball = loc(SolidPrior(upright_sigma=0.0, upright_x_sigma=0.005), (0.0, 0.0), (60.0, 60.0))
     bare = loc(SolidPrior(rim_sigma_px=0.0, upright_sigma=0.0), (rim, rim), (60.0, 60.0))
     assert np.allclose(ball.cov_world, bare.cov_world, rtol=1e-12, atol=0.0)
+
+
+def test_upright_is_a_height_of_at_least_one_and_a_half_widths() -> None:
+    prior = SolidPrior()
+    assert prior.upright(40.0, 60.0) and prior.upright(0.5, 1.0)
+    assert not prior.upright(40.0, 59.9) and not prior.upright(60.0, 40.0) and not prior.upright(0.0, 0.0)
 
 
 def test_the_smaller_extent_counts_and_no_extent_or_prior_changes_nothing() -> None:

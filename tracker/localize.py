@@ -122,7 +122,7 @@ class SolidPrior:
 
     def upright(self, width_px: float, height_px: float) -> bool:
         """Whether a target seen width_px wide and height_px high is an upright body (a person)."""
-        return height_px >= self.upright_aspect * width_px
+        return height_px > 0 and height_px >= self.upright_aspect * width_px
 
 
 class Localizer:

@@ -207,12 +207,14 @@ class Pipeline:
         terms = self.sigma_schedule.terms(track_id, frame.index, start, lambda: self._sigma_terms(frame, b, blobs))
         _, _, w, h = cv2.boundingRect(b.mask.view(np.uint8))
         jump = self.heights.sigma_px(track_id, frame.index, float(h), b.disparity)
-        cx, cy = terms.centroid_px
+        cx = with_gap_x(terms.centroid_px[0], terms.gap_x_px, self.localizer.solid, w, h)
+        cy = terms.centroid_px[1]
         return self.localizer.locate(b.centroid_rect, b.disparity, max(b.disparity_sigma, terms.disparity_px),
                                      b.area, frame.gimbal, (cx, float(np.hypot(cy, jump))), (float(w), float(h)))
 
     def _sigma_terms(self, frame: StereoFrame, b: Blob, blobs: list[Blob]) -> SigmaTerms:
-        return SigmaTerms(self._disparity_sigma(frame, b), self._centroid_extra(frame, b, blobs))
+        extra, gap_x = self._centroid_extra(frame, b, blobs)
+        return SigmaTerms(self._disparity_sigma(frame, b), extra, gap_x)
 
     def between_frames(self, deadline: float) -> None:
         """In real time, after a frame's results are out and before the next frame is due (`deadline`,
@@ -256,19 +258,22 @@ class Pipeline:
         matcher's own."""
         return parts_sigma(self.verifier.part_disparities(frame, b), b.disparity_sigma)
 
-    def _centroid_extra(self, frame: StereoFrame, b: Blob, blobs: list[Blob]) -> tuple[float, float]:
+    def _centroid_extra(self, frame: StereoFrame, b: Blob, blobs: list[Blob]
+                        ) -> tuple[tuple[float, float], float]:
         """The centroid's further 1-σ (px, x and y): where the target is seen in part, where its outline
         is drawn by warping (no temporal model at this pose: the cameras move; tracker.outline), the
         outline's whole pixels and the parts of a body its segmentation may have missed in the notches of
-        its outline (tracker.segmentation); in quadrature, all being independent."""
+        its outline (tracker.segmentation); in quadrature, all being independent. The hull gap's x term
+        is returned apart (SigmaTerms.gap_x_px; `with_gap_x`)."""
         others = [e for o in blobs if o is not b for e in object_and_shadow(o.box, o.mask, o.disparity, o.bg_disparity)]
         px, py = self._partly_seen(frame, b, others)
-        terms = outline_terms_px(b.mask, self.localizer.solid)
+        edge, (gap_x, gap_y) = outline_sigma_px(b.mask)
+        terms = [edge, (0.0, gap_y)]
         if self.subtractor.left_background(frame.gimbal) is None:
             terms.append(warped_outline_sigma_px(b.mask, self.outline))
         for ox, oy in terms:
             px, py = float(np.hypot(px, ox)), float(np.hypot(py, oy))
-        return px, py
+        return (px, py), gap_x
 
     def _partly_seen(self, frame: StereoFrame, b: Blob, others: list[tuple[Box, BoolA, float]]
                      ) -> tuple[float, float]:
@@ -302,16 +307,13 @@ class Pipeline:
         return low
 
 
-def outline_terms_px(mask: BoolA, solid: SolidPrior | None) -> list[tuple[float, float]]:
-    """The outline's own terms of the centroid's 1-σ (px, x and y; tracker.segmentation): its whole pixels'
-    and its hull gap's. An upright body's hull gap counts along y only: along x its notches are the spaces
-    between its swinging limbs, which the SolidPrior's upright_x_sigma describes."""
-    edge, (gx, gy) = outline_sigma_px(mask)
-    if solid is not None:
-        _, _, w, h = cv2.boundingRect(mask.view(np.uint8))
-        if solid.upright(w, h):
-            gx = 0.0
-    return [edge, (gx, gy)]
+def with_gap_x(cx: float, gap_x: float, solid: SolidPrior | None, width_px: float, height_px: float) -> float:
+    """The centroid's further 1-σ along x (px) with the hull gap's x term (tracker.segmentation) in quadrature,
+    but for an upright body (SolidPrior.upright of its seen width and height, px): along x its notches are
+    the spaces between its swinging limbs, which the SolidPrior's upright_x_sigma describes."""
+    if solid is not None and solid.upright(width_px, height_px):
+        return cx
+    return float(np.hypot(cx, gap_x))
 
 
 def _explained(b: Blob, hints: F64, blobs: list[Blob]) -> bool:

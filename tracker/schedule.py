@@ -196,10 +196,13 @@ class SigmaTerms:
     """The costly terms of a target's 1-σ (tracker.pipeline): disparity_px, the scatter of its parts'
     disparities (px, tracker.disparity_sigma); centroid_px, the centroid's further 1-σ (px, x and y) where
     it is seen in part or its outline is drawn by warping (tracker.visibility, tracker.outline), and from
-    the outline's whole pixels and a body's hull gap (tracker.segmentation)."""
+    the outline's whole pixels and a body's hull gap (tracker.segmentation), but for the hull gap's x term:
+    gap_x_px, apart, for it counts only where the target is not an upright body at the frame the terms are
+    used for (tracker.localize.SolidPrior.upright; the terms may be a few frames old)."""
 
     disparity_px: float
     centroid_px: tuple[float, float]
+    gap_x_px: float = 0.0
 
 
 class SigmaSchedule:
