@@ -150,6 +150,7 @@ class Localizer:
         (s_cx, s_cy), s_dcal = cal.principal_px, cal.disparity_px * self.rect.f / float(self.rect.rig.left.K[0, 0])
         S = np.diag([s_c**2 + s_cx**2 + extra_px[0] ** 2, s_c**2 + s_cy**2 + extra_px[1] ** 2,
                      max(disparity_sigma, 0.02) ** 2 + PHASE_SIGMA_PX**2 + s_dcal**2])
+        person = False  # an upright body (SolidPrior.upright): its own x term and depth prior
         if self.solid is not None and extent_px is not None:
             s_rim = self.solid.rim_sigma_px / np.sqrt(2.0)  # the outline's sides on a curved, shaded rim
             w, h = extent_px
@@ -159,7 +160,7 @@ class Localizer:
             S[1, 1] += s_rim**2 + max(upright**2 - extra_px[1] ** 2, 0.0)  # y: max(extra, upright)
         cov_rig = J @ S @ J.T + cal.scale_rel**2 * np.outer(X_rig, X_rig)  # f·b off by ε: X -> (1 + ε) X
         if self.solid is not None and extent_px is not None:
-            X_rig, cov_rig = self._behind_face(X_rig, cov_rig, min(extent_px), self.solid.upright(*extent_px))
+            X_rig, cov_rig = self._behind_face(X_rig, cov_rig, min(extent_px), person)
         g = gimbal or GimbalState()
         R_wr = gimbal_rotation(g.pan_deg, g.tilt_deg)
         X_w = R_wr @ X_rig
