@@ -1,4 +1,5 @@
-"""A small region's disparity stands only where its whole outline agrees (tracker.strips.outline_agrees)."""
+"""A small region's disparity stands only where its whole outline agrees (tracker.strips.outline_agrees);
+where it does not, the whole region, outline included, gives it (tracker.strips.whole_match)."""
 
 from __future__ import annotations
 
@@ -67,14 +68,47 @@ def _strips_over(h: dict[str, np.ndarray], monkeypatch: pytest.MonkeyPatch) -> t
     return strips, h["whole"].astype(bool)
 
 
-def test_the_match_of_a_small_region_is_dropped_where_its_outline_disagrees(monkeypatch: pytest.MonkeyPatch
-                                                                            ) -> None:
+def test_where_its_outline_disagrees_a_small_region_takes_the_whole_regions_own_match(
+        monkeypatch: pytest.MonkeyPatch) -> None:
     h = _far_head()
     strips, region = _strips_over(h, monkeypatch)
+    fit = strips.match(region, float(h["d0"]), 4)  # the core's 8.9 px disagrees: the whole region's best
+    assert fit is not None and abs(fit.disparity - TRUE_D) < 0.3 and fit.score >= st.WHOLE_MIN_SCORE
+    monkeypatch.setattr(st, "whole_match", lambda *a, **k: None)  # without it: no match at all
     assert strips.match(region, float(h["d0"]), 4) is None
     monkeypatch.setattr(st, "outline_agrees", lambda *a, **k: True)  # without the check: the core's match
     fit = strips.match(region, float(h["d0"]), 4)
     assert fit is not None and fit.disparity > TRUE_D + 2.0
+
+
+def _periodic_bar(period: int, d: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Strips (12 x 44 px) of a bar 4 px high at disparity d over a background at 2 px, the bar's
+    texture repeating every `period` columns, and the mask of its 14 px seen in the window (columns 20 to
+    40); the bar goes on beyond them, so that its texture, not its ends, says where it matches."""
+    rows, cols, off, n = 12, 44, 20, 20
+    yy, xx = np.mgrid[0:rows, 0:cols]
+    phase = np.random.default_rng(3).uniform(0, 2 * np.pi, (rows, 1))
+    background = _texture(5)
+
+    def view(shift_bar: int, shift_bg: int) -> np.ndarray:
+        out = background[yy + 50, xx + 50 + shift_bg].copy()
+        on = (yy >= 4) & (yy < 8)
+        bar = 128 + 90 * np.sin(2 * np.pi * (xx + shift_bar) / period + phase)
+        out[on] = bar[on]
+        return np.asarray(out.clip(0, 255), np.uint8)
+
+    on = (yy >= 4) & (yy < 8) & (xx >= off + 3) & (xx < off + 17)
+    return view(0, 0), view(d, 2), on[:, off:off + n].astype(np.uint8)
+
+
+def test_the_whole_region_gives_no_disparity_where_it_matches_as_well_elsewhere() -> None:
+    # a bar whose texture repeats every 3 px matches at 3, 6 and 9 px alike: no peak stands out
+    left, right, whole = _periodic_bar(3, 6)
+    assert st.whole_match(left, right, whole, 20, 6.0) is None
+    # the same bar with a texture that does not repeat within the span: its own disparity
+    left, right, whole = _periodic_bar(23, 6)
+    fit = st.whole_match(left, right, whole, 20, 5.0)
+    assert fit is not None and abs(fit.disparity - 6.0) < 0.2
 
 
 def test_a_small_textured_region_whose_outline_agrees_keeps_its_match() -> None:
