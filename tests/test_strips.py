@@ -74,6 +74,10 @@ def test_where_its_outline_disagrees_a_small_region_takes_the_whole_regions_own_
     strips, region = _strips_over(h, monkeypatch)
     fit = strips.match(region, float(h["d0"]), 4)  # the core's 8.9 px disagrees: the whole region's best
     assert fit is not None and abs(fit.disparity - TRUE_D) < 0.3 and fit.score >= st.WHOLE_MIN_SCORE
+    threshold = st.WHOLE_MIN_SCORE
+    monkeypatch.setattr(st, "WHOLE_MIN_SCORE", fit.score + 0.05)  # scoring under the threshold: none
+    assert strips.match(region, float(h["d0"]), 4) is None
+    monkeypatch.setattr(st, "WHOLE_MIN_SCORE", threshold)
     monkeypatch.setattr(st, "whole_match", lambda *a, **k: None)  # without it: no match at all
     assert strips.match(region, float(h["d0"]), 4) is None
     monkeypatch.setattr(st, "outline_agrees", lambda *a, **k: True)  # without the check: the core's match
@@ -83,7 +87,7 @@ def test_where_its_outline_disagrees_a_small_region_takes_the_whole_regions_own_
 
 def _periodic_bar(period: int, d: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Strips (12 x 44 px) of a bar 4 px high at disparity d over a background at 2 px, the bar's
-    texture repeating every `period` columns, and the mask of its 14 px seen in the window (columns 20 to
+    texture repeating every `period` columns, and the mask of the 14 px of its length seen in the window (columns 20 to
     40); the bar goes on beyond them, so that its texture, not its ends, says where it matches."""
     rows, cols, off, n = 12, 44, 20, 20
     yy, xx = np.mgrid[0:rows, 0:cols]
@@ -109,6 +113,8 @@ def test_the_whole_region_gives_no_disparity_where_it_matches_as_well_elsewhere(
     left, right, whole = _periodic_bar(23, 6)
     fit = st.whole_match(left, right, whole, 20, 5.0)
     assert fit is not None and abs(fit.disparity - 6.0) < 0.2
+    # about 11 px the span is 7 to 15 px: its best lies at its end, no peak within it
+    assert st.whole_match(left, right, whole, 20, 11.0) is None
 
 
 def test_a_small_textured_region_whose_outline_agrees_keeps_its_match() -> None:

@@ -76,9 +76,9 @@ class Strips:
         matched, 873-876 still 2.0 to 2.3 px near (the whole region scores 0.20 below its best there, at
         the margin). Where the core's match disagrees or fails, the whole region gives the disparity itself
         (`whole_match`, about the core's match or the prior d0): the track then holds through frames
-        869-887 at 6.2 to 6.7 px (the truth 6.5 to 6.6), one frame lost of the 17 it lost before.
-        Range RMSE 0.616 -> 0.501 m with the check, 0.433 m with the whole region's match; detection
-        0.959 -> 0.958 -> 0.977."""
+        869-887 at 6.2 to 6.7 px (the truth 6.5 to 6.6), one frame lost (888) where 17 were, 869-872 and
+        877-889, with the check alone and the code of the day. Range RMSE 0.616 -> 0.501 m with the check
+        (0.497 m later that day), 0.433 m with the whole region's match; detection 0.959 -> 0.958 -> 0.977."""
         core, whole = self._core_and_whole(region)
         fit = None
         if d0 is not None:  # a good prior: refine from it, search around it only if that fails
@@ -110,12 +110,17 @@ def _whole_scores(left: U8, right: U8, whole: U8, off: int, d: float) -> tuple[N
 
 def whole_match(left: U8, right: U8, whole: U8, off: int, d: float) -> RegionMatch | None:
     """A small region's disparity from the whole region, outline included, where its core's match
-    disagrees with it or fails: the whole region's best weighted ZNCC over the whole disparities within
-    4 px of d (the core's match, or the track's prediction), refined about it (tracker.stereo.refine_region),
-    scoring at least WHOLE_MIN_SCORE. None where the best lies at that span's end (no peak within it).
-    The outline's pixels mix the object with the background beside it and lower the score, but they
-    carry the region's edges, which a far head's smooth inside lacks (endless:body frame 874: the core of
-    27 px best at 9 px, the whole region of 101 px best at 6 px, 0.70, the truth 6.57 px)."""
+    disagrees with it or fails: the whole region's best weighted ZNCC over the whole disparities from
+    floor(d) - 4 to ceil(d) + 4 (d: the core's match, or the track's prediction), refined about it
+    (tracker.stereo.refine_region, which needs ceil(d) + 5 columns of the right strip left of the window:
+    a peak nearer the strips' end gives None), scoring at least WHOLE_MIN_SCORE and WHOLE_MARGIN above
+    every disparity more than 1 px from it. None where the best lies at the span's end or nothing in the
+    span lies that far from it. The outline's pixels mix the object with the background beside it and
+    lower the score, but they carry the region's edges, which a far head's smooth inside lacks
+    (endless:body frame 874: the core of 27 px best at 9 px, the whole region of 101 px best at 6 px,
+    0.70, the truth 6.57 px). The span is wider than a far track's search radius (1 px at 27 m,
+    Verifier.search_radius): a track that took a wrong disparity is 2 px off (8.7 px there) and must be
+    able to come back; the margin keeps out the hedge's or a post's second peak that radius guards against."""
     ds, scores = _whole_scores(left, right, whole, off, d)
     if ds.size < 3:
         return None
@@ -123,8 +128,8 @@ def whole_match(left: U8, right: U8, whole: U8, off: int, d: float) -> RegionMat
     if k == 0 or k == ds.size - 1:
         return None
     away = np.abs(np.arange(ds.size) - k) > 1
-    if away.any() and float(scores[k] - scores[away].max()) < WHOLE_MARGIN:
-        return None
+    if not away.any() or float(scores[k] - scores[away].max()) < WHOLE_MARGIN:
+        return None  # nothing to stand out from, or no peak that does
     return refine_region(left, right, whole, off, 0, float(ds[k]), min_score=WHOLE_MIN_SCORE)
 
 
