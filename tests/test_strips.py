@@ -68,20 +68,22 @@ def _strips_over(h: dict[str, np.ndarray], monkeypatch: pytest.MonkeyPatch) -> t
     return strips, h["whole"].astype(bool)
 
 
-def test_where_its_outline_disagrees_a_small_region_takes_the_whole_regions_own_match(
+def test_where_its_outline_disagrees_a_small_tracked_region_takes_the_whole_regions_own_match(
         monkeypatch: pytest.MonkeyPatch) -> None:
     h = _far_head()
     strips, region = _strips_over(h, monkeypatch)
-    fit = strips.match(region, float(h["d0"]), 4)  # the core's 8.9 px disagrees: the whole region's best
+    d0 = float(h["d0"])
+    fit = strips.match(region, d0, 4, whole_ok=True)  # the core's 8.9 px disagrees: the whole region's best
     assert fit is not None and abs(fit.disparity - TRUE_D) < 0.3 and fit.score >= st.WHOLE_MIN_SCORE
+    assert strips.match(region, d0, 4) is None  # a new object's: none (a shadow's edge on a wall took it)
     threshold = st.WHOLE_MIN_SCORE
     monkeypatch.setattr(st, "WHOLE_MIN_SCORE", fit.score + 0.05)  # scoring under the threshold: none
-    assert strips.match(region, float(h["d0"]), 4) is None
+    assert strips.match(region, d0, 4, whole_ok=True) is None
     monkeypatch.setattr(st, "WHOLE_MIN_SCORE", threshold)
     monkeypatch.setattr(st, "whole_match", lambda *a, **k: None)  # without it: no match at all
-    assert strips.match(region, float(h["d0"]), 4) is None
+    assert strips.match(region, d0, 4, whole_ok=True) is None
     monkeypatch.setattr(st, "outline_agrees", lambda *a, **k: True)  # without the check: the core's match
-    fit = strips.match(region, float(h["d0"]), 4)
+    fit = strips.match(region, d0, 4, whole_ok=True)
     assert fit is not None and fit.disparity > TRUE_D + 2.0
 
 

@@ -65,7 +65,7 @@ class Strips:
             core = whole
         return core, whole
 
-    def match(self, region: BoolA, d0: float | None, radius: int) -> RegionMatch | None:
+    def match(self, region: BoolA, d0: float | None, radius: int, whole_ok: bool = False) -> RegionMatch | None:
         """One disparity for the region (raw-left mask with its box's origin), mask-weighted, shrunk by
         about a pixel so that no background next to the outline enters the match. A small region, whose
         shrunk core keeps under half its pixels (a far head and shoulders, about 100 px), is matched on
@@ -74,11 +74,13 @@ class Strips:
         and shoulders over a hedge at 27 m: frames 872-878 and 889-892 matched 2.0 to 2.8 px too near
         (range up to 7.6 m short; 879-888 were not matched); with the check 872 and 877-889 were not
         matched, 873-876 still 2.0 to 2.3 px near (the whole region scores 0.20 below its best there, at
-        the margin). Where the core's match disagrees or fails, the whole region gives the disparity itself
-        (`whole_match`, about the core's match or the prior d0): the track then holds through frames
+        the margin). Where the core's match disagrees or fails, the whole region of a tracked object
+        (whole_ok: a track's prediction d0, not a new object's coarse search) gives the disparity itself
+        (`whole_match`, about the core's match or d0; a new object's whole region took a shadow's edge on
+        a wall for an object 3 px before it, tests/test_temporal.py): the track then holds through frames
         869-887 at 6.2 to 6.7 px (the truth 6.5 to 6.6), one frame lost (888) where 17 were, 869-872 and
         877-889, with the check alone and the code of the day. Range RMSE 0.616 -> 0.501 m with the check
-        (0.497 m later that day), 0.433 m with the whole region's match; detection 0.959 -> 0.958 -> 0.977."""
+        (0.497 m later that day), 0.434 m with the whole region's match; detection 0.959 -> 0.958 -> 0.976."""
         core, whole = self._core_and_whole(region)
         fit = None
         if d0 is not None:  # a good prior: refine from it, search around it only if that fails
@@ -91,7 +93,9 @@ class Strips:
         if fit is not None and outline_agrees(self.left, self.right, whole, self.off, fit.disparity, AGREE_TOL):
             return fit
         around = fit.disparity if fit is not None else d0
-        return None if around is None else whole_match(self.left, self.right, whole, self.off, around)
+        if not whole_ok or around is None:
+            return None
+        return whole_match(self.left, self.right, whole, self.off, around)
 
 
 def _whole_scores(left: U8, right: U8, whole: U8, off: int, d: float) -> tuple[NDArray[np.int64], NDArray[np.float64]]:

@@ -239,7 +239,7 @@ class TemporalDetector:
             return None  # the background's own texture, relit: a shadow or a local change of light
         hint = nearest_hint(hints, obj, box)
         radius = self.verifier.search_radius(hint)  # about a track's prediction: how far it can move
-        fine = self.verifier.match_object(frame, box, obj, hint, radius)
+        fine = self.verifier.match_object(frame, box, obj, hint, radius, hint is not None)
         if fine is None:
             return None
         same = _same_surface(self.verifier.rect, frame, box, obj, fine.disparity, eps)
@@ -247,7 +247,7 @@ class TemporalDetector:
             return None
         if int(np.count_nonzero(same)) < 0.9 * int(np.count_nonzero(obj)):  # part of it was something else
             obj = same
-            fine = self.verifier.match_object(frame, box, obj, fine.disparity, radius)
+            fine = self.verifier.match_object(frame, box, obj, fine.disparity, radius, hint is not None)
             if fine is None:
                 return None
         m8 = obj.view(np.uint8)

@@ -197,9 +197,10 @@ class Verifier:
             obj, either, d0 = stereo
             if model is not None:  # cameras still: the temporal model draws the exact outline
                 obj, gain, changed = self._temporal_outline(frame, box, model, obj, either & free, found)
-        fine = None if matched is None else self.match_object(frame, box, matched, d0, self.search_radius(d_hint))
+        radius, tracked = self.search_radius(d_hint), d_hint is not None
+        fine = None if matched is None else self.match_object(frame, box, matched, d0, radius, tracked)
         if fine is None and (matched is None or not np.array_equal(matched, obj)):  # the same search, not twice
-            fine = self.match_object(frame, box, obj, d0, self.search_radius(d_hint))
+            fine = self.match_object(frame, box, obj, d0, radius, tracked)
         if fine is None:
             return None
         if self.rim is not None and model is not None and changed is not None:  # cameras still (the model
@@ -264,20 +265,22 @@ class Verifier:
         return int(min(max(np.ceil(2.0 * step), 1), _SEARCH_RADIUS))
 
     def match_object(self, frame: StereoFrame, box: Box, obj: BoolA, d0: float | None,
-                     radius: int = _SEARCH_RADIUS) -> RegionMatch | None:
+                     radius: int = _SEARCH_RADIUS, tracked: bool = False) -> RegionMatch | None:
         """The object's disparity from matching its own pixels (a search over the whole range first when
         no prior d0 is known). None without a match, or with one the image edge may have cut short (the
         right camera may not see it). A region whose depth varies (a walker's swinging limbs about its
         centroid) may match nowhere as one surface: then its top, middle and bottom thirds are tried; and a
         near object's slanted faces, whose disparity changes across the window by several pixels (a face at
-        45° across 48 px at 3 m: about 5 px), match nowhere at one disparity: then windows half as wide."""
+        45° across 48 px at 3 m: about 5 px), match nowhere at one disparity: then windows half as wide.
+        tracked: d0 is a track's prediction (or a body's found this frame), so a small region's whole
+        outline may give the disparity where its core's match disagrees or fails (Strips.match)."""
         d0 = self._coarse_disparity(frame, box, obj, d0)
         if d0 is None:
             return None
         for half in (_MATCH_HALF, _MATCH_HALF_SLANT):
             for part in row_thirds(obj):
                 strips = self._strips(frame, box, part, d0, half)
-                fine = None if strips is None else strips.match(part, d0, radius)
+                fine = None if strips is None else strips.match(part, d0, radius, tracked)
                 if fine is not None and strips is not None:
                     return None if strips.clipped and fine.disparity > strips.d_hi - 2.0 else fine
         return None
