@@ -85,10 +85,14 @@ def test_live_page_shows_status_and_updating_telemetry(server: Server, page_of: 
     wait_for(lambda: frame_no() > first + 5, 10, what="the frame number advancing")
     wait_for(lambda: debug(page)["telemetryMessages"] > 30, 15, what="30 telemetry messages")
     # a target appears in the endless scene within a while: r, θ, φ with their σ
-    r = page.get_by_test_id("ro-r")
-    wait_for(lambda: "±" in r.inner_text(), 60, what="a target's range")
-    assert re.search(r"\d+\.\d+ ± \d+\.\d+ m", r.inner_text())
-    assert "±" in page.get_by_test_id("ro-theta").inner_text()
+    r, theta = page.get_by_test_id("ro-r"), page.get_by_test_id("ro-theta")
+    shown: dict[str, str] = {}
+
+    def target_shown() -> bool:  # read together: the target may be lost between two reads (endless scene)
+        shown["r"], shown["theta"] = r.inner_text(), theta.inner_text()
+        return "±" in shown["r"] and "±" in shown["theta"]
+    wait_for(target_shown, 60, what="a target's range and azimuth")
+    assert re.search(r"\d+\.\d+ ± \d+\.\d+ m", shown["r"])
     # the plots' field of view is the rig's (the simulated rig: 57.7 x 44.3 degrees), at the mount's angles
     with server.as_admin() as c:
         fov = c.get("/api/status").json()["source"]
