@@ -80,17 +80,17 @@ def test_where_its_outline_disagrees_a_small_tracked_region_takes_the_whole_regi
     monkeypatch.setattr(st, "WHOLE_MIN_SCORE", fit.score + 0.05)  # scoring under the threshold: none
     assert strips.match(region, d0, 4, whole_ok=True) is None
     monkeypatch.setattr(st, "WHOLE_MIN_SCORE", threshold)
-    monkeypatch.setattr(st, "whole_match", lambda *a, **k: None)  # without it: no match at all
+    monkeypatch.setattr(st, "_peak_match", lambda *a, **k: None)  # without whole_match's peak: no match at all
     assert strips.match(region, d0, 4, whole_ok=True) is None
-    monkeypatch.setattr(st, "outline_agrees", lambda *a, **k: True)  # without the check: the core's match
+    monkeypatch.setattr(st, "_agrees", lambda *a, **k: True)  # without outline_agrees' check: the core's match
     fit = strips.match(region, d0, 4, whole_ok=True)
     assert fit is not None and fit.disparity > TRUE_D + 2.0
 
 
 def _periodic_bar(period: int, d: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Strips (12 x 44 px) of a bar 4 px high at disparity d over a background at 2 px, the bar's
-    texture repeating every `period` columns, and the mask of the 14 px of its length seen in the window (columns 20 to
-    40); the bar goes on beyond them, so that its texture, not its ends, says where it matches."""
+    """Strips (12 x 44 px) of a bar 4 px high at disparity d over a background at 2 px, the bar's texture
+    repeating every `period` columns, and the mask of the 14 px of its length seen in the window (columns
+    20 to 40); the bar goes on beyond them, so that its texture, not its ends, says where it matches."""
     rows, cols, off, n = 12, 44, 20, 20
     yy, xx = np.mgrid[0:rows, 0:cols]
     phase = np.random.default_rng(3).uniform(0, 2 * np.pi, (rows, 1))

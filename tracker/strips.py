@@ -90,15 +90,17 @@ class Strips:
                                min_score=MIN_SCORE)
         if 2 * int(np.count_nonzero(core)) >= int(np.count_nonzero(whole)):
             return fit
-        if fit is not None and outline_agrees(self.left, self.right, whole, self.off, fit.disparity, AGREE_TOL):
-            return fit
         around = fit.disparity if fit is not None else d0
-        if not whole_ok or around is None:
+        if around is None or (fit is None and not whole_ok):
             return None
-        return whole_match(self.left, self.right, whole, self.off, around)
+        ds, scores = _whole_scores(self.left, self.right, whole, self.off, around)  # once, for both tests
+        if fit is not None and _agrees(ds, scores, fit.disparity, AGREE_TOL):
+            return fit
+        return _peak_match(self.left, self.right, whole, self.off, ds, scores) if whole_ok else None
 
 
-def _whole_scores(left: U8, right: U8, whole: U8, off: int, d: float) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+def _whole_scores(left: U8, right: U8, whole: U8, off: int, d: float
+                  ) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
     """The whole region's weighted ZNCC at the whole disparities from floor(d) - 4 to ceil(d) + 4 that the
     strips hold (`outline_agrees`): the disparities and their scores."""
     n = whole.shape[1]
@@ -125,7 +127,12 @@ def whole_match(left: U8, right: U8, whole: U8, off: int, d: float) -> RegionMat
     0.70, the truth 6.57 px). The span is wider than a far track's search radius (1 px at 27 m,
     Verifier.search_radius): a track that took a wrong disparity is 2 px off (8.7 px there) and must be
     able to come back; the margin keeps out the hedge's or a post's second peak that radius guards against."""
-    ds, scores = _whole_scores(left, right, whole, off, d)
+    return _peak_match(left, right, whole, off, *_whole_scores(left, right, whole, off, d))
+
+
+def _peak_match(left: U8, right: U8, whole: U8, off: int, ds: NDArray[np.int64], scores: NDArray[np.float64]
+                ) -> RegionMatch | None:
+    """`whole_match` on the whole region's scores at the disparities ds (`_whole_scores`)."""
     if ds.size < 3:
         return None
     k = int(np.argmax(scores))
@@ -147,7 +154,11 @@ def outline_agrees(left: U8, right: U8, whole: U8, off: int, d: float, tol: floa
     the whole region's, the whole region's edges, which the core leaves out, say the core matched its
     smooth inside wrongly (the head above: the core 0.92 at 8.9 px, the whole region 0.47 there and 0.73
     at 6). False where fewer than two disparities can be tried (nothing to compare with)."""
-    ds, scores = _whole_scores(left, right, whole, off, d)
+    return _agrees(*_whole_scores(left, right, whole, off, d), d, tol)
+
+
+def _agrees(ds: NDArray[np.int64], scores: NDArray[np.float64], d: float, tol: float) -> bool:
+    """`outline_agrees` on the whole region's scores at the disparities ds (`_whole_scores`)."""
     if ds.size < 2:
         return False
     return float(np.interp(d, ds, scores)) >= float(scores.max()) - tol
