@@ -24,6 +24,7 @@ from tracker.egomotion import PoseCompensation
 from tracker.frames import StereoFrame
 from tracker.geometry import StereoRig
 from tracker.localize import Localization, Localizer, SolidPrior
+from tracker.one_camera import OneCameraConfig
 from tracker.outline import OutlineConfig, warped_outline_sigma_px
 from tracker.rectify import Rectifier
 from tracker.regions import hints_inside
@@ -85,7 +86,7 @@ class Pipeline:
                  tracker: TrackerConfig | None = None, origin: F64 | None = None,
                  temporal: TemporalConfig | None = None, verify_budget_ms: float | None = None,
                  sigma_budget_ms: float | None = None, solid: SolidPrior | None = None,
-                 between_frames: bool = False):
+                 between_frames: bool = False, one_camera: OneCameraConfig | None = None):
         """verify_budget_ms: in real time, candidate boxes that hold no track's prediction, and regions
         beside a tracked object that hold none, are verified only while the frame's step is younger than
         this (ms); the others wait for the next frame (tracker.schedule.VerifySchedule; None: all are
@@ -94,13 +95,14 @@ class Pipeline:
         ms of the step's start, else taken from a recent frame (tracker.schedule.SigmaSchedule; None:
         every frame). solid: what is known of solid targets' unseen depth (tracker.localize.SolidPrior;
         None: flat targets, the range is the seen face's). between_frames: the caller calls
-        `between_frames` after each step, so the searches the budget leaves out wait for it."""
+        `between_frames` after each step, so the searches the budget leaves out wait for it. one_camera: when
+        a tracked object only the left camera sees is taken at its track's disparity (tracker.one_camera)."""
         self.rig = rig
         self.rect = Rectifier(rig)
         self.bg = BackgroundDepth(self.rect, near_m=(detector or DetectorConfig()).near_m)
         self.subtractor = StereoSubtractor(self.bg, detector)
         self.verifier = Verifier(self.subtractor, self.rect)
-        self.temporal = TemporalDetector(self.subtractor, self.verifier, temporal)
+        self.temporal = TemporalDetector(self.subtractor, self.verifier, temporal, one_camera)
         # centroid σ 0: the outline's own is worked out in _centroid_extra
         self.localizer = Localizer(self.rect, origin, centroid_sigma_px=0.0, solid=solid)
         self.tracker = MultiTracker(tracker)
@@ -160,18 +162,23 @@ class Pipeline:
         hints = self.ego.from_home(self.tracker.predictions(frame.t), frame.gimbal)  # at this frame's pose
         # a track receding fast may be predicted past infinity (disparity <= 0): that narrows no search
         hints = hints[np.isfinite(hints).all(axis=1) & (hints[:, 2] > 0)]
+        coast = self.tracker.coasting(frame.t, self.temporal.one_cfg.max_missed)
+        coast[:, :3] = self.ego.from_home(coast[:, :3], frame.gimbal)  # x, y at this pose
+        coast = coast[np.isfinite(coast).all(axis=1) & (coast[:, 2] > 0)]
         seek = self._with_found(hints, frame)  # and the new objects found between frames
         boxes = cands.worth_verifying(self.subtractor.cfg.moving_min_cells, seek)
         blobs, deferred = self.schedule.run(boxes, seek, lambda box, may_search: self.verifier.verify_all(
             frame, box, seek, may_search=may_search), t0)
         blobs = join_parts(without_duplicates(blobs), self.rect.area_moments)  # one object again, or a part
-        blobs = self.temporal.detect(frame, blobs, hints)  # cameras still: objects too near their background
+        # cameras still: objects too near their background, tracked ones the right camera cannot see
+        blobs = self.temporal.detect(frame, blobs, hints, coast)
         blobs = join_occluded(blobs, lambda box: self._background_disparity(frame, box),  # one body, two sides
                               self.subtractor.cfg.min_depth_gap, self.rect.area_moments)
         t2 = time.perf_counter()
         obs = np.array([[b.centroid_raw[0], b.centroid_raw[1], b.disparity] for b in blobs]).reshape(-1, 3)
         # from centroids and disparities alone (not their σ), as seen at home: the mount's turning taken out
-        ids = self.tracker.update(frame.t, self.ego.to_home(obs, frame.gimbal))
+        sigma_d, alone = np.array([b.disparity_sigma for b in blobs]), np.array([b.one_camera for b in blobs], bool)
+        ids = self.tracker.update(frame.t, self.ego.to_home(obs, frame.gimbal), sigma_d, alone)
         self.sigma_schedule.keep_only([tr.track_id for tr in self.tracker.tracks])
         self.heights.keep_only([tr.track_id for tr in self.tracker.tracks])
         t_ids = time.perf_counter()
@@ -255,7 +262,9 @@ class Pipeline:
         """The scatter of the disparities of the blob's parts (px; tracker.disparity_sigma: correlated
         residuals, interpolation, a slanted surface; it includes the pixel noise the matcher's σ stands
         for), or twice the matcher's own with too few parts: the disparity's 1-σ where larger than the
-        matcher's own."""
+        matcher's own. A blob seen by one camera has the prediction's 1-σ (tracker.one_camera)."""
+        if b.one_camera:
+            return b.disparity_sigma
         return parts_sigma(self.verifier.part_disparities(frame, b), b.disparity_sigma)
 
     def _centroid_extra(self, frame: StereoFrame, b: Blob, blobs: list[Blob]

@@ -35,6 +35,7 @@ from numpy.typing import NDArray
 from tracker.detect import Box, StereoSubtractor
 from tracker.frames import StereoFrame
 from tracker.masks import largest_region, temporal_outline
+from tracker.one_camera import OneCameraConfig, coast_sigma_px, hidden_from_right, nearest_prediction
 from tracker.rectify import Rectifier
 from tracker.regions import background_disparity, mask_centroid, nearest_hint
 from tracker.verify import Blob, Verifier
@@ -153,19 +154,32 @@ def _without_rims(blobs: list[Blob]) -> list[Blob]:
                                         for o in blobs)]
 
 
+def _unclaimed(coast: F64 | None, blobs: list[Blob]) -> F64 | None:
+    """The rows of `coast` (MultiTracker.coasting) whose predicted position no object found already holds in
+    its box: one object per track."""
+    if coast is None or not blobs:
+        return coast
+    keep = [not any(b.box[0] <= c[0] < b.box[2] and b.box[1] <= c[1] < b.box[3] for b in blobs) for c in coast]
+    return np.asarray(coast[np.array(keep, bool)], np.float64)
+
+
 class TemporalDetector:
     """Candidates and verification from the left temporal model while the cameras are still.
     `detect(frame, found, hints)` -> all the frame's blobs; `gain` is the last frame's global gain (or None)."""
 
-    def __init__(self, sub: StereoSubtractor, verifier: Verifier, config: TemporalConfig | None = None):
+    def __init__(self, sub: StereoSubtractor, verifier: Verifier, config: TemporalConfig | None = None,
+                 one_camera: OneCameraConfig | None = None):
         self.sub, self.verifier = sub, verifier
         self.cfg = config or TemporalConfig()
+        self.one_cfg = one_camera or OneCameraConfig()
         self.gain: float | None = None
 
-    def detect(self, frame: StereoFrame, found: list[Blob], hints: F64 | None) -> list[Blob]:
+    def detect(self, frame: StereoFrame, found: list[Blob], hints: F64 | None, coast: F64 | None = None
+               ) -> list[Blob]:
         """All the frame's objects: those the stereo stages `found`, those of them near their background
         replaced by the temporal model's object over the changed region they lie in when that is larger,
-        and the changed regions they do not touch verified as new objects."""
+        and the changed regions they do not touch verified as new objects, or as tracked objects the right
+        camera cannot see (coast: MultiTracker.coasting at this frame's pose; None: none such)."""
         self.gain = None
         model = self.sub.left_background(frame.gimbal)
         if model is None:
@@ -186,7 +200,7 @@ class TemporalDetector:
             covered = [b for b in out if _overlap(b.box, box)]
             if covered and not all(self._near_background(b) for b in covered):
                 continue  # objects well clear of their background: their stereo outline holds
-            blob = self.verify(frame, box, bg, dev, g, hints)
+            blob = self.verify(frame, box, bg, dev, g, hints, _unclaimed(coast, out))
             if blob is None or (covered and blob.area <= _union_area(covered)):
                 continue
             out = [b for b in out if all(b is not c for c in covered)] + [blob]
@@ -224,10 +238,11 @@ class TemporalDetector:
             out.append((max(x * s - m, 0), max(y * s - m, 0), min((x + bw) * s + m, w), min((y + bh) * s + m, h)))
         return out
 
-    def verify(self, frame: StereoFrame, box: Box, bg: F32, dev: F32, g: float, hints: F64 | None
-               ) -> Blob | None:
+    def verify(self, frame: StereoFrame, box: Box, bg: F32, dev: F32, g: float, hints: F64 | None,
+               coast: F64 | None = None) -> Blob | None:
         """One changed region: its outline, the relit-texture test, its own disparity and the test that it
-        does not lie behind the background."""
+        does not lie behind the background; failing its disparity, a tracked object the right camera cannot
+        see (coast: MultiTracker.coasting at this frame's pose; None: no such sightings; tracker.one_camera)."""
         cfg, eps = self.cfg, self.sub.cfg.epsilon
         x0, y0, x1, y1 = box
         key, b, d = frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1], dev[y0:y1, x0:x1]
@@ -237,6 +252,14 @@ class TemporalDetector:
             return None
         if texture_corr(key, b, obj) > cfg.max_texture_corr:
             return None  # the background's own texture, relit: a shadow or a local change of light
+        blob = self._matched(frame, box, obj, gain, hints)
+        if blob is None and coast is not None:
+            return self._left_only(frame, box, obj, gain, coast)
+        return blob
+
+    def _matched(self, frame: StereoFrame, box: Box, obj: BoolA, gain: float, hints: F64 | None) -> Blob | None:
+        """A region's object from its own stereo match, not behind the background, seen by both cameras."""
+        cfg, eps = self.cfg, self.sub.cfg.epsilon
         hint = nearest_hint(hints, obj, box)
         radius = self.verifier.search_radius(hint)  # about a track's prediction: how far it can move
         fine = self.verifier.match_object(frame, box, obj, hint, radius, hint is not None)
@@ -250,11 +273,8 @@ class TemporalDetector:
             fine = self.verifier.match_object(frame, box, obj, fine.disparity, radius, hint is not None)
             if fine is None:
                 return None
-        m8 = obj.view(np.uint8)
-        area, c_box = mask_centroid(m8)
-        c_raw = c_box + (x0, y0)  # eq. (10)
         cm = self.sub.correspondence(0, frame.gimbal, box)
-        d_bg = background_disparity(cm, obj, c_raw - (x0, y0))
+        d_bg = background_disparity(cm, obj, mask_centroid(obj.view(np.uint8))[1])
         known = obj & cm.valid
         d_med = float(np.median(cm.disparity[known])) if np.any(known) else d_bg
         if fine.disparity < d_med - max(cfg.behind_tolerance_px, 3.0 * fine.sigma):
@@ -263,7 +283,36 @@ class TemporalDetector:
         # there: a false match
         if not self._near(fine.disparity, d_med) and not self._right_sees(frame, box, obj, fine.disparity):
             return None
-        # eq. (10) in rectified coordinates, pixels weighted by their area: Σ a x / Σ a, Σ a y / Σ a
+        return self._blob(box, obj, fine.disparity, fine.sigma, d_bg, fine.score, gain, False)
+
+    def _left_only(self, frame: StereoFrame, box: Box, obj: BoolA, gain: float, coast: F64) -> Blob | None:
+        """A region whose stereo match failed as a tracked object seen by the left camera alone: a track's
+        prediction (a row of `coast`) lies within the association gate of its centroid, the track's last
+        stereo sighting is fewer than `max_frames` frames old, and the right camera cannot see most of the
+        region at the predicted disparity (tracker.one_camera.hidden_from_right). Its disparity is the prediction's."""
+        k = nearest_prediction(coast, mask_centroid(obj.view(np.uint8))[1] + box[:2], self.one_cfg)
+        if k is None or coast[k, 3] >= self.one_cfg.max_frames:
+            return None
+        d = float(coast[k, 2])
+        w = self.verifier.rect.rig.left.size[0]
+        ext = (box[0], box[1], min(box[2] + self.sub.bg.num_disparities, w), box[3])
+        cm = self.sub.correspondence(0, frame.gimbal, ext)
+        hidden = hidden_from_right(self.verifier.rect, box, obj, d, cm, ext, self.one_cfg)
+        if int(np.count_nonzero(hidden)) < self.one_cfg.min_hidden * int(np.count_nonzero(obj)):
+            return None
+        rect = self.verifier.rect
+        sigma = coast_sigma_px(d, float(coast[k, 4]), float(coast[k, 5]), rect.f * rect.b, self.one_cfg)
+        inner = cm.crop((0, 0, box[2] - box[0], box[3] - box[1]))
+        d_bg = background_disparity(inner, obj, mask_centroid(obj.view(np.uint8))[1])
+        return self._blob(box, obj, d, sigma, d_bg, 0.0, gain, True)
+
+    def _blob(self, box: Box, obj: BoolA, d: float, sigma: float, d_bg: float, score: float, gain: float,
+              one_camera: bool) -> Blob:
+        """The Blob of a region: its area, eq. (10) in raw pixels and, weighting each pixel by its area, in
+        rectified ones (Σ a x / Σ a, Σ a y / Σ a)."""
+        x0, y0, x1, y1 = box
+        m8 = obj.view(np.uint8)
+        area, c_box = mask_centroid(m8)
         sx, sy, sa, _ = cv2.mean(self.verifier.rect.area_moments[y0:y1, x0:x1], mask=m8)
-        return Blob(box, obj, area, c_raw, np.array([sx / sa, sy / sa]), fine.disparity, fine.sigma, d_bg,
-                    fine.score, gain)
+        return Blob(box, obj, area, c_box + (x0, y0), np.array([sx / sa, sy / sa]), d, sigma, d_bg, score, gain,
+                    one_camera)

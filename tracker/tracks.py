@@ -15,6 +15,8 @@ from numpy.typing import NDArray
 from scipy.optimize import linear_sum_assignment
 
 F64 = NDArray[np.float64]
+NO_STEREO = 1_000_000  # `Track.one_camera` of a track no stereo sighting vouches for
+STEREO_KEPT = 5  # stereo sightings a track keeps for the disparity it holds (MultiTracker.coasting)
 
 
 @dataclass
@@ -28,6 +30,8 @@ class Track:
     hits: int = 1
     missed: int = 0
     confirmed: bool = False
+    one_camera: int = 0  # sightings in a row by the left camera alone (tracker.one_camera)
+    stereo: list[tuple[float, float, float]] = field(default_factory=list)  # the last stereo sightings' t, d, σ_d
 
     def predict(self, t: float) -> F64:
         return np.asarray(self.state + self.velocity * (t - self.t))
@@ -61,7 +65,13 @@ class MultiTracker:
         self._next_id = 1
         self.primary_id: int | None = None
 
-    def update(self, t: float, obs: F64) -> list[int]:
+    def update(self, t: float, obs: F64, sigma_d: F64 | None = None, one_camera: NDArray[np.bool_] | None = None
+               ) -> list[int]:
+        """obs: (N, 3) x, y, disparity; sigma_d: (N,) their disparities' 1-σ (px); one_camera: (N,) which were
+        seen by the left camera alone, at their track's predicted disparity (tracker.one_camera). A track
+        started by such a sighting may not live on more of them."""
+        sd = np.zeros(len(obs)) if sigma_d is None else sigma_d
+        alone = np.zeros(len(obs), bool) if one_camera is None else one_camera
         assigned = [-1] * len(obs)
         pairs = self._associate(t, obs)
         used = set()
@@ -74,6 +84,9 @@ class MultiTracker:
             tr.hits += 1
             tr.missed = 0
             tr.confirmed |= tr.hits >= self.cfg.confirm_hits
+            tr.one_camera = tr.one_camera + 1 if alone[oi] else 0
+            if not alone[oi]:
+                tr.stereo = [*tr.stereo[1 - STEREO_KEPT:], (t, float(obs[oi, 2]), float(sd[oi]))]
             used.add(ti)
             assigned[oi] = tr.track_id
         for ti, tr in enumerate(self.tracks):
@@ -82,7 +95,8 @@ class MultiTracker:
         self.tracks = [tr for tr in self.tracks if tr.missed <= self.cfg.max_missed]
         for oi in range(len(obs)):
             if assigned[oi] == -1:
-                tr = Track(self._next_id, obs[oi].astype(float), t=t, confirmed=self.cfg.confirm_hits <= 1)
+                tr = Track(self._next_id, obs[oi].astype(float), t=t, confirmed=self.cfg.confirm_hits <= 1,
+                           one_camera=NO_STEREO if alone[oi] else 0, stereo=[(t, float(obs[oi, 2]), float(sd[oi]))])
                 self._next_id += 1
                 self.tracks.append(tr)
                 assigned[oi] = tr.track_id
@@ -130,5 +144,26 @@ class MultiTracker:
         """Predicted (x, y, disparity) at time t of the tracks seen in the last few frames, (N, 3)."""
         return np.array([tr.predict(t) for tr in self.tracks if tr.missed <= 2]).reshape(-1, 3)
 
+    def coasting(self, t: float, max_missed: int) -> F64:
+        """The confirmed tracks a sighting by the left camera alone may continue (tracker.one_camera), those
+        missed in at most `max_missed` frames in a row and started by a stereo sighting, (N, 6): predicted x
+        and y at time t; the disparity held from the last STEREO_KEPT stereo sightings, their median (a
+        disparity's rate from a few noisy frames drifts further than the object does, and the last sighting
+        before an object passes behind a post is the one least seen); its 1-σ (px), the larger of the
+        sightings' median 1-σ and their scatter; the frames since the last stereo sighting but one (one-
+        camera sightings and misses); and the age of the sightings (s, from their mean time)."""
+        rows = []
+        for tr in self.tracks:
+            if tr.confirmed and tr.missed <= max_missed and tr.one_camera < NO_STEREO:
+                d, sigma, t_seen = _held(tr.stereo)
+                rows.append([*tr.predict(t)[:2], d, tr.one_camera + tr.missed, sigma, t - t_seen])
+        return np.array(rows, np.float64).reshape(-1, 6)
+
     def get(self, track_id: int) -> Track | None:
         return next((tr for tr in self.tracks if tr.track_id == track_id), None)
+
+
+def _held(stereo: list[tuple[float, float, float]]) -> tuple[float, float, float]:
+    """From stereo sightings (t, d, σ_d): the median d, max(median σ_d, scatter of d) and the mean t."""
+    a = np.array(stereo, np.float64)
+    return float(np.median(a[:, 1])), max(float(np.median(a[:, 2])), float(np.std(a[:, 1]))), float(a[:, 0].mean())

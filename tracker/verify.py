@@ -38,7 +38,8 @@ BoolA = NDArray[np.bool_]
 class Blob:
     """A verified object in one frame. box: raw-left pixels (x0, y0, x1, y1); mask: bool (y1-y0, x1-x0);
     centroid_raw: eq. (10) in raw left pixels; centroid_rect: the same pixels' centroid in rectified
-    coordinates; disparity, disparity_sigma, bg_disparity in px (rectified)."""
+    coordinates; disparity, disparity_sigma, bg_disparity in px (rectified); one_camera: seen by the left
+    camera alone, its disparity a track's prediction (tracker.one_camera)."""
 
     box: Box
     mask: BoolA
@@ -50,6 +51,7 @@ class Blob:
     bg_disparity: float
     score: float
     gain: float = 1.0
+    one_camera: bool = False
 
 
 _MATCH_HALF = (24, 16)  # half width and height (px) of the largest window matched
