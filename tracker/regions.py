@@ -85,4 +85,3 @@ def nearest_hint(hints: F64 | None, region: BoolA, box: Box) -> float | None:
         return None
     c = np.array([xs.mean() + x0, ys.mean() + y0])
     return float(min(inside, key=lambda h: float(np.hypot(*(h[:2] - c))))[2])
-
