@@ -110,15 +110,58 @@ def test_a_confirmed_track_may_be_continued_holding_its_recent_stereo_disparity(
     assert mt.coasting(1.0, 8)[0, 3] == 0  # a stereo sighting resets the count
 
 
-def test_a_track_started_by_a_one_camera_sighting_is_never_continued_by_one() -> None:
+def test_a_track_started_by_a_one_camera_sighting_needs_a_stereo_one() -> None:
     mt = MultiTracker()
     _sight(mt, 0.0, 100.0, 12.0, True)
-    _sight(mt, 0.033, 100.0, 12.0, False)  # confirmed by a stereo sighting
-    assert len(mt.coasting(0.066, 8)) == 1
+    assert mt.tracks[0].stereo == []  # no borrowed disparity among its stereo sightings
+    _sight(mt, 0.033, 100.0, 12.5, False)  # confirmed by a stereo sighting
+    assert mt.tracks[0].confirmed and len(mt.coasting(0.066, 8)) == 1
+    assert mt.coasting(0.066, 8)[0, 2] == 12.5
     mt2 = MultiTracker()
     _sight(mt2, 0.0, 100.0, 12.0, True)
     _sight(mt2, 0.033, 100.0, 12.0, True)
-    assert mt2.tracks[0].confirmed and len(mt2.coasting(0.066, 8)) == 0
+    assert not mt2.tracks[0].confirmed and len(mt2.coasting(0.066, 8)) == 0  # never a false target so
+
+
+def test_the_updates_since_the_last_stereo_sighting_count_misses_between_one_camera_sightings() -> None:
+    """A thin sliver seen every other frame: misses and one-camera sightings alike count towards max_frames."""
+    mt = MultiTracker()
+    _sight(mt, 0.0, 100.0, 12.0, False)
+    _sight(mt, 0.033, 100.0, 12.0, False)
+    for k in range(1, 21):
+        t = 0.033 * (1 + k)
+        if k % 2:
+            mt.update(t, np.zeros((0, 3)))
+        else:
+            _sight(mt, t, 100.0, 12.0, True)
+        assert mt.coasting(t + 0.033, 8)[0, 3] == k
+
+
+def test_one_object_per_track_continued() -> None:
+    """A track's prediction lying on an object found, or within the gate of a region already taken for it
+    by one camera, is offered to no other region."""
+    from tracker.temporal import _unclaimed
+    from tracker.verify import Blob
+
+    coast = np.array([[50.0, 270.0, 12.0, 1, 0.05, 0.03], [300.0, 250.0, 20.0, 0, 0.05, 0.03]])
+    mask = np.ones((20, 20), bool)
+    one = Blob((30, 260, 50, 280), mask, 400, np.array([40.0, 270.0]), np.array([40.0, 270.0]), 12.0, 0.3,
+               3.0, 0.0, 1.0, True)
+    assert np.array_equal(_unclaimed(coast, [one], 40.0), coast[1:])
+    stereo = Blob((290, 240, 310, 260), mask, 400, np.array([300.0, 250.0]), np.array([300.0, 250.0]), 20.0,
+                  0.05, 3.0, 0.97)
+    assert np.array_equal(_unclaimed(coast, [stereo], 40.0), coast[:1])
+    far_stereo = Blob((30, 300, 50, 320), mask, 400, np.array([40.0, 310.0]), np.array([40.0, 310.0]), 12.0,
+                      0.05, 3.0, 0.97)  # a stereo object 40 px below: claims nothing it does not hold
+    assert np.array_equal(_unclaimed(coast, [far_stereo], 40.0), coast)
+
+
+def _longest_run(rows: list[tuple[int, int, bool, float, float]]) -> int:
+    run = best = 0
+    for r in rows:
+        run = run + 1 if r[2] else 0
+        best = max(best, run)
+    return best
 
 
 def _behind_the_post(one_camera: OneCameraConfig | None) -> list[tuple[int, int, bool, float, float]]:
@@ -158,3 +201,5 @@ def test_a_plate_passing_behind_a_post_keeps_its_track_while_only_the_left_camer
     without = _behind_the_post(OneCameraConfig(max_frames=0))
     assert sum(1 for r in without if r[1] == 0) >= len(alone)
     assert not any(r[2] for r in without)
+    # the tracker counts them as such: at most max_frames in a row after a stereo sighting
+    assert _longest_run(rows) > 10 and _longest_run(_behind_the_post(OneCameraConfig(max_frames=10))) == 10

@@ -6,10 +6,12 @@ row; paper eq. 1-2) leaves its image, or meets a nearer background surface first
 D > d covers right columns x_q - D). The strips find no disparity there, and a tracked walker passing
 behind a post was lost for its whole passage (endless:body, frames 2298-2314).
 
-Where a changed region of the left temporal model holds a track's predicted position, its stereo match
-failed, and most of it is hidden from the right camera at the predicted disparity, the region is taken
-as the track's object at that disparity (`hidden_share`, `coast_sigma_px`); the tracker (tracker.tracks)
-lets a track live on such sightings for `max_frames` frames at most before it needs a stereo match again.
+Where a changed region of the left temporal model matches at no disparity, its centroid lies within the
+association gate of a confirmed track's predicted position (`nearest_prediction`), and the right camera
+cannot see at least half of it at the disparity the track holds (the median of its last stereo sightings;
+`hidden_from_right`), the region is taken as that track's object at that disparity, with a 1-σ that grows
+as the object's range may change (`coast_sigma_px`); the tracker (tracker.tracks.MultiTracker.coasting)
+offers a track for such sightings for at most `max_frames` updates after its last stereo sighting.
 """
 
 from __future__ import annotations
@@ -29,16 +31,17 @@ Box = tuple[int, int, int, int]
 
 @dataclass(frozen=True)
 class OneCameraConfig:
-    """min_hidden: the share of a region the right camera must be unable to see at the predicted disparity
+    """min_hidden: the share of a region the right camera must be unable to see at the held disparity
     (below it a failed stereo match says the region is not the track's object); depth_tol_px: how much
     nearer (disparity, px) a background surface must be to hide it; cover_px: how near (right rectified
-    columns, px) its image must fall; sigma0_px: the least 1-σ (px) of a stereo sighting's disparity held
-    (a partly seen object's); range_rate_mps: how fast (m/s) a tracked object's range may change (a
-    walker's pace) while only the left camera sees it;
-    max_frames: the most frames since a track's last stereo sighting (sightings by the left camera alone
-    and misses) it may live on such a sighting; max_missed: the most frames in a row a track so continued
-    may have been missed (a thin sliver of it shows in no candidate); gate_px: how far (px) from the region's
-    centroid the track's predicted position may lie (the tracker's association gate, TrackerConfig.gate_px:
+    columns, px) its image must fall; sigma0_px: a 1-σ (px) added in quadrature to that of the stereo
+    sightings' disparity held (a partly seen object's, before it went out of the right camera's view);
+    range_rate_mps: how fast (m/s) a tracked object's range may change (a walker's pace) while only the
+    left camera sees it; max_frames: a track may be continued so while fewer updates than this (sightings
+    by the left camera alone and misses) have passed since its last stereo sighting; max_missed: the most
+    frames in a row a track so continued may have been missed (a thin sliver of it shows in no
+    candidate); gate_px: how far (px) from the region's centroid the track's predicted position may lie
+    (the tracker's association gate, TrackerConfig.gate_px:
     the part of a body a post hides may hold its centre)."""
 
     min_hidden: float = 0.5
@@ -54,8 +57,10 @@ class OneCameraConfig:
 def hidden_from_right(rect: Rectifier, box: Box, obj: BoolA, d: float, cm: CorrespondenceMap, ext: Box,
                       config: OneCameraConfig) -> BoolA:
     """The region's pixels (bool (h, w) over box) the right camera cannot see at disparity d (px): their
-    right image point (rectified x - d on the same row) lies outside the raw right image, or within
-    `cover_px` of the right image of a known background pixel nearer by more than `depth_tol_px`.
+    right image point (rectified x - d on the same row) lies outside the rectified frame or the raw right
+    image (the first is what the matchers, working in rectified coordinates, see), or within `cover_px` of
+    the right image of a known background pixel nearer by more than `depth_tol_px` (background pixels in
+    the same raw row: exact without lens distortion, and for upright posts).
 
     cm: the learnt background's correspondence over `ext`, a box with box's rows that reaches at least as
     far right as the nearest background can hide (x1 + D_max - d)."""
@@ -76,8 +81,8 @@ def hidden_from_right(rect: Rectifier, box: Box, obj: BoolA, d: float, cm: Corre
 
 
 def coast_sigma_px(d: float, matched_sigma: float, age_s: float, fb: float, config: OneCameraConfig) -> float:
-    """The 1-σ (px) of a disparity d held from a stereo sighting `age_s` seconds old: that sighting's own
-    (the matcher's, and at least `sigma0_px`) and the range the object may have covered since at
+    """The 1-σ (px) of a disparity d held from stereo sightings `age_s` seconds old (on average), in
+    quadrature: theirs (`matched_sigma`), `sigma0_px`, and the range the object may have covered since at
     `range_rate_mps`, as disparity (d = f b / z, so δd = d² δz / (f b); fb: f·b in px·m)."""
     drift = d * d * config.range_rate_mps * age_s / fb
     return float(np.sqrt(matched_sigma**2 + config.sigma0_px**2 + drift**2))

@@ -262,7 +262,7 @@ class Pipeline:
         """The scatter of the disparities of the blob's parts (px; tracker.disparity_sigma: correlated
         residuals, interpolation, a slanted surface; it includes the pixel noise the matcher's σ stands
         for), or twice the matcher's own with too few parts: the disparity's 1-σ where larger than the
-        matcher's own. A blob seen by one camera has the prediction's 1-σ (tracker.one_camera)."""
+        matcher's own. A blob seen by one camera has its held disparity's 1-σ (tracker.one_camera)."""
         if b.one_camera:
             return b.disparity_sigma
         return parts_sigma(self.verifier.part_disparities(frame, b), b.disparity_sigma)

@@ -38,6 +38,7 @@ from tracker.masks import largest_region, temporal_outline
 from tracker.one_camera import OneCameraConfig, coast_sigma_px, hidden_from_right, nearest_prediction
 from tracker.rectify import Rectifier
 from tracker.regions import background_disparity, mask_centroid, nearest_hint
+from tracker.stereo import RegionMatch
 from tracker.verify import Blob, Verifier
 
 F32 = NDArray[np.float32]
@@ -154,12 +155,15 @@ def _without_rims(blobs: list[Blob]) -> list[Blob]:
                                         for o in blobs)]
 
 
-def _unclaimed(coast: F64 | None, blobs: list[Blob]) -> F64 | None:
+def _unclaimed(coast: F64 | None, blobs: list[Blob], gate_px: float) -> F64 | None:
     """The rows of `coast` (MultiTracker.coasting) whose predicted position no object found already holds in
-    its box: one object per track."""
+    its box, nor lies within `gate_px` of a one-camera object's centroid (it continued that track): one
+    object per track."""
     if coast is None or not blobs:
         return coast
-    keep = [not any(b.box[0] <= c[0] < b.box[2] and b.box[1] <= c[1] < b.box[3] for b in blobs) for c in coast]
+    keep = [not any(b.box[0] <= c[0] < b.box[2] and b.box[1] <= c[1] < b.box[3]
+                    or b.one_camera and float(np.hypot(*(c[:2] - b.centroid_raw))) <= gate_px for b in blobs)
+            for c in coast]
     return np.asarray(coast[np.array(keep, bool)], np.float64)
 
 
@@ -200,7 +204,7 @@ class TemporalDetector:
             covered = [b for b in out if _overlap(b.box, box)]
             if covered and not all(self._near_background(b) for b in covered):
                 continue  # objects well clear of their background: their stereo outline holds
-            blob = self.verify(frame, box, bg, dev, g, hints, _unclaimed(coast, out))
+            blob = self.verify(frame, box, bg, dev, g, hints, _unclaimed(coast, out, self.one_cfg.gate_px))
             if blob is None or (covered and blob.area <= _union_area(covered)):
                 continue
             out = [b for b in out if all(b is not c for c in covered)] + [blob]
@@ -241,8 +245,11 @@ class TemporalDetector:
     def verify(self, frame: StereoFrame, box: Box, bg: F32, dev: F32, g: float, hints: F64 | None,
                coast: F64 | None = None) -> Blob | None:
         """One changed region: its outline, the relit-texture test, its own disparity and the test that it
-        does not lie behind the background; failing its disparity, a tracked object the right camera cannot
-        see (coast: MultiTracker.coasting at this frame's pose; None: no such sightings; tracker.one_camera)."""
+        does not lie behind the background; failing these, a tracked object the right camera cannot see
+        (coast: MultiTracker.coasting at this frame's pose; None: no such sightings; tracker.one_camera). A
+        match refused as behind the background is no evidence against it there: the sliver of a walker beside
+        a post holds pixels whose learnt background is the post (endless:body, frames 2306-2314: refused so,
+        they were lost again)."""
         cfg, eps = self.cfg, self.sub.cfg.epsilon
         x0, y0, x1, y1 = box
         key, b, d = frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1], dev[y0:y1, x0:x1]
@@ -252,27 +259,28 @@ class TemporalDetector:
             return None
         if texture_corr(key, b, obj) > cfg.max_texture_corr:
             return None  # the background's own texture, relit: a shadow or a local change of light
-        blob = self._matched(frame, box, obj, gain, hints)
+        hint = nearest_hint(hints, obj, box)
+        radius = self.verifier.search_radius(hint)  # about a track's prediction: how far it can move
+        fine = self.verifier.match_object(frame, box, obj, hint, radius, hint is not None)
+        blob = None if fine is None else self._checked(frame, box, obj, gain, fine, hint, radius)
         if blob is None and coast is not None:
             return self._left_only(frame, box, obj, gain, coast)
         return blob
 
-    def _matched(self, frame: StereoFrame, box: Box, obj: BoolA, gain: float, hints: F64 | None) -> Blob | None:
-        """A region's object from its own stereo match, not behind the background, seen by both cameras."""
+    def _checked(self, frame: StereoFrame, box: Box, obj: BoolA, gain: float, fine: RegionMatch, hint: float | None,
+                 radius: int) -> Blob | None:
+        """A region's object from its stereo match `fine`: the part that is one surface at it (matched again
+        where that is less than 9/10 of the region), not behind the background, seen by both cameras."""
         cfg, eps = self.cfg, self.sub.cfg.epsilon
-        hint = nearest_hint(hints, obj, box)
-        radius = self.verifier.search_radius(hint)  # about a track's prediction: how far it can move
-        fine = self.verifier.match_object(frame, box, obj, hint, radius, hint is not None)
-        if fine is None:
-            return None
         same = _same_surface(self.verifier.rect, frame, box, obj, fine.disparity, eps)
         if int(np.count_nonzero(same)) < cfg.min_area_px:
             return None
         if int(np.count_nonzero(same)) < 0.9 * int(np.count_nonzero(obj)):  # part of it was something else
             obj = same
-            fine = self.verifier.match_object(frame, box, obj, fine.disparity, radius, hint is not None)
-            if fine is None:
+            again = self.verifier.match_object(frame, box, obj, fine.disparity, radius, hint is not None)
+            if again is None:
                 return None
+            fine = again
         cm = self.sub.correspondence(0, frame.gimbal, box)
         d_bg = background_disparity(cm, obj, mask_centroid(obj.view(np.uint8))[1])
         known = obj & cm.valid
@@ -286,12 +294,14 @@ class TemporalDetector:
         return self._blob(box, obj, fine.disparity, fine.sigma, d_bg, fine.score, gain, False)
 
     def _left_only(self, frame: StereoFrame, box: Box, obj: BoolA, gain: float, coast: F64) -> Blob | None:
-        """A region whose stereo match failed as a tracked object seen by the left camera alone: a track's
-        prediction (a row of `coast`) lies within the association gate of its centroid, the track's last
-        stereo sighting is fewer than `max_frames` frames old, and the right camera cannot see most of the
-        region at the predicted disparity (tracker.one_camera.hidden_from_right). Its disparity is the prediction's."""
+        """A region that matches at no disparity as a tracked object seen by the left camera alone: of the
+        tracks whose last stereo sighting is at most `max_frames` updates old (rows of `coast`), the one whose
+        predicted position lies nearest its centroid, within the association gate, and the right camera
+        cannot see at least `min_hidden` of the region at that track's held disparity
+        (tracker.one_camera.hidden_from_right). Its disparity is the held one."""
+        coast = coast[coast[:, 3] < self.one_cfg.max_frames]
         k = nearest_prediction(coast, mask_centroid(obj.view(np.uint8))[1] + box[:2], self.one_cfg)
-        if k is None or coast[k, 3] >= self.one_cfg.max_frames:
+        if k is None:
             return None
         d = float(coast[k, 2])
         w = self.verifier.rect.rig.left.size[0]

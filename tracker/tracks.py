@@ -15,7 +15,7 @@ from numpy.typing import NDArray
 from scipy.optimize import linear_sum_assignment
 
 F64 = NDArray[np.float64]
-NO_STEREO = 1_000_000  # `Track.one_camera` of a track no stereo sighting vouches for
+NO_STEREO = 1_000_000  # `Track.since_stereo` of a track no stereo sighting vouches for
 STEREO_KEPT = 5  # stereo sightings a track keeps for the disparity it holds (MultiTracker.coasting)
 
 
@@ -30,7 +30,7 @@ class Track:
     hits: int = 1
     missed: int = 0
     confirmed: bool = False
-    one_camera: int = 0  # sightings in a row by the left camera alone (tracker.one_camera)
+    since_stereo: int = 0  # updates since its last stereo sighting: sightings by the left camera alone, misses
     stereo: list[tuple[float, float, float]] = field(default_factory=list)  # the last stereo sightings' t, d, σ_d
 
     def predict(self, t: float) -> F64:
@@ -68,8 +68,8 @@ class MultiTracker:
     def update(self, t: float, obs: F64, sigma_d: F64 | None = None, one_camera: NDArray[np.bool_] | None = None
                ) -> list[int]:
         """obs: (N, 3) x, y, disparity; sigma_d: (N,) their disparities' 1-σ (px); one_camera: (N,) which were
-        seen by the left camera alone, at their track's predicted disparity (tracker.one_camera). A track
-        started by such a sighting may not live on more of them."""
+        seen by the left camera alone, at a track's held disparity (tracker.one_camera). A track started by
+        such a sighting is confirmed only after a stereo sighting and may not live on more of them."""
         sd = np.zeros(len(obs)) if sigma_d is None else sigma_d
         alone = np.zeros(len(obs), bool) if one_camera is None else one_camera
         assigned = [-1] * len(obs)
@@ -83,8 +83,8 @@ class MultiTracker:
             tr.state, tr.t = obs[oi].astype(float), t
             tr.hits += 1
             tr.missed = 0
-            tr.confirmed |= tr.hits >= self.cfg.confirm_hits
-            tr.one_camera = tr.one_camera + 1 if alone[oi] else 0
+            tr.since_stereo = tr.since_stereo + 1 if alone[oi] else 0
+            tr.confirmed |= tr.hits >= self.cfg.confirm_hits and tr.since_stereo < NO_STEREO
             if not alone[oi]:
                 tr.stereo = [*tr.stereo[1 - STEREO_KEPT:], (t, float(obs[oi, 2]), float(sd[oi]))]
             used.add(ti)
@@ -92,11 +92,13 @@ class MultiTracker:
         for ti, tr in enumerate(self.tracks):
             if ti not in used:
                 tr.missed += 1
+                tr.since_stereo += 1
         self.tracks = [tr for tr in self.tracks if tr.missed <= self.cfg.max_missed]
         for oi in range(len(obs)):
             if assigned[oi] == -1:
-                tr = Track(self._next_id, obs[oi].astype(float), t=t, confirmed=self.cfg.confirm_hits <= 1,
-                           one_camera=NO_STEREO if alone[oi] else 0, stereo=[(t, float(obs[oi, 2]), float(sd[oi]))])
+                seen = [] if alone[oi] else [(t, float(obs[oi, 2]), float(sd[oi]))]
+                tr = Track(self._next_id, obs[oi].astype(float), t=t, since_stereo=0 if seen else NO_STEREO,
+                           confirmed=self.cfg.confirm_hits <= 1 and bool(seen), stereo=seen)
                 self._next_id += 1
                 self.tracks.append(tr)
                 assigned[oi] = tr.track_id
@@ -146,17 +148,17 @@ class MultiTracker:
 
     def coasting(self, t: float, max_missed: int) -> F64:
         """The confirmed tracks a sighting by the left camera alone may continue (tracker.one_camera), those
-        missed in at most `max_missed` frames in a row and started by a stereo sighting, (N, 6): predicted x
+        missed in at most `max_missed` frames in a row and seen by stereo since they began, (N, 6): predicted x
         and y at time t; the disparity held from the last STEREO_KEPT stereo sightings, their median (a
         disparity's rate from a few noisy frames drifts further than the object does, and the last sighting
         before an object passes behind a post is the one least seen); its 1-σ (px), the larger of the
-        sightings' median 1-σ and their scatter; the frames since the last stereo sighting but one (one-
-        camera sightings and misses); and the age of the sightings (s, from their mean time)."""
+        sightings' median 1-σ and their scatter; the updates since the last stereo sighting (one-camera
+        sightings and misses); and the age of the sightings (s, from their mean time)."""
         rows = []
         for tr in self.tracks:
-            if tr.confirmed and tr.missed <= max_missed and tr.one_camera < NO_STEREO:
+            if tr.confirmed and tr.missed <= max_missed and tr.since_stereo < NO_STEREO:
                 d, sigma, t_seen = _held(tr.stereo)
-                rows.append([*tr.predict(t)[:2], d, tr.one_camera + tr.missed, sigma, t - t_seen])
+                rows.append([*tr.predict(t)[:2], d, tr.since_stereo, sigma, t - t_seen])
         return np.array(rows, np.float64).reshape(-1, 6)
 
     def get(self, track_id: int) -> Track | None:

@@ -39,7 +39,7 @@ class Blob:
     """A verified object in one frame. box: raw-left pixels (x0, y0, x1, y1); mask: bool (y1-y0, x1-x0);
     centroid_raw: eq. (10) in raw left pixels; centroid_rect: the same pixels' centroid in rectified
     coordinates; disparity, disparity_sigma, bg_disparity in px (rectified); one_camera: seen by the left
-    camera alone, its disparity a track's prediction (tracker.one_camera)."""
+    camera alone, its disparity the one a track holds (tracker.one_camera)."""
 
     box: Box
     mask: BoolA
