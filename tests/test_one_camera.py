@@ -147,13 +147,13 @@ def test_one_object_per_track_continued() -> None:
     mask = np.ones((20, 20), bool)
     one = Blob((30, 260, 50, 280), mask, 400, np.array([40.0, 270.0]), np.array([40.0, 270.0]), 12.0, 0.3,
                3.0, 0.0, 1.0, True)
-    assert np.array_equal(_unclaimed(coast, [one], 40.0), coast[1:])
+    assert np.array_equal(_unclaimed(lambda: coast, [one], 40.0), coast[1:])
     stereo = Blob((290, 240, 310, 260), mask, 400, np.array([300.0, 250.0]), np.array([300.0, 250.0]), 20.0,
                   0.05, 3.0, 0.97)
-    assert np.array_equal(_unclaimed(coast, [stereo], 40.0), coast[:1])
+    assert np.array_equal(_unclaimed(lambda: coast, [stereo], 40.0), coast[:1])
     far_stereo = Blob((30, 300, 50, 320), mask, 400, np.array([40.0, 310.0]), np.array([40.0, 310.0]), 12.0,
                       0.05, 3.0, 0.97)  # a stereo object 40 px below: claims nothing it does not hold
-    assert np.array_equal(_unclaimed(coast, [far_stereo], 40.0), coast)
+    assert np.array_equal(_unclaimed(lambda: coast, [far_stereo], 40.0), coast)
 
 
 def _longest_run(rows: list[tuple[int, int, bool, float, float]]) -> int:

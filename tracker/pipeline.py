@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from functools import partial
+from functools import cache, partial
 
 import cv2
 import numpy as np
@@ -162,16 +162,13 @@ class Pipeline:
         hints = self.ego.from_home(self.tracker.predictions(frame.t), frame.gimbal)  # at this frame's pose
         # a track receding fast may be predicted past infinity (disparity <= 0): that narrows no search
         hints = hints[np.isfinite(hints).all(axis=1) & (hints[:, 2] > 0)]
-        coast = self.tracker.coasting(frame.t, self.temporal.one_cfg.max_missed)
-        coast[:, :3] = self.ego.from_home(coast[:, :3], frame.gimbal)  # x, y at this pose
-        coast = coast[np.isfinite(coast).all(axis=1) & (coast[:, 2] > 0)]
         seek = self._with_found(hints, frame)  # and the new objects found between frames
         boxes = cands.worth_verifying(self.subtractor.cfg.moving_min_cells, seek)
         blobs, deferred = self.schedule.run(boxes, seek, lambda box, may_search: self.verifier.verify_all(
             frame, box, seek, may_search=may_search), t0)
         blobs = join_parts(without_duplicates(blobs), self.rect.area_moments)  # one object again, or a part
         # cameras still: objects too near their background, tracked ones the right camera cannot see
-        blobs = self.temporal.detect(frame, blobs, hints, coast)
+        blobs = self.temporal.detect(frame, blobs, hints, cache(partial(self._coasting, frame)))
         blobs = join_occluded(blobs, lambda box: self._background_disparity(frame, box),  # one body, two sides
                               self.subtractor.cfg.min_depth_gap, self.rect.area_moments)
         t2 = time.perf_counter()
@@ -202,6 +199,13 @@ class Pipeline:
         pid = self.tracker.primary_id
         primary = next((d for d in dets if d.track_id == pid), None)
         return FrameResult(frame.index, frame.t, dets, pid, primary, ms, deferred)
+
+    def _coasting(self, frame: StereoFrame) -> F64:
+        """MultiTracker.coasting at this frame's time and pose (x, y through the mount's turning), for the
+        temporal stage, which asks for it only where a region matches nowhere (tracker.one_camera)."""
+        coast = self.tracker.coasting(frame.t, self.temporal.one_cfg.max_missed)
+        coast[:, :3] = self.ego.from_home(coast[:, :3], frame.gimbal)
+        return coast[np.isfinite(coast).all(axis=1) & (coast[:, 2] > 0)]
 
     def _background_disparity(self, frame: StereoFrame, box: Box) -> tuple[NDArray[np.float32], NDArray[np.bool_]]:
         """The learnt background's rectified disparity (px) over a box of the left image, and where known."""

@@ -26,7 +26,9 @@ temporal model (background B and mean deviation D per pixel, at gain 1; tracker.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 
 import cv2
 import numpy as np
@@ -155,11 +157,12 @@ def _without_rims(blobs: list[Blob]) -> list[Blob]:
                                         for o in blobs)]
 
 
-def _unclaimed(coast: F64 | None, blobs: list[Blob], gate_px: float) -> F64 | None:
-    """The rows of `coast` (MultiTracker.coasting) whose predicted position no object found already holds in
-    its box, nor lies within `gate_px` of a one-camera object's centroid (it continued that track): one
-    object per track."""
-    if coast is None or not blobs:
+def _unclaimed(coasting: Callable[[], F64], blobs: list[Blob], gate_px: float) -> F64:
+    """The rows of `coasting()` (MultiTracker.coasting) whose predicted position no object found already
+    holds in its box, nor lies within `gate_px` of a one-camera object's centroid (it continued that track):
+    one object per track."""
+    coast = coasting()
+    if not blobs:
         return coast
     keep = [not any(b.box[0] <= c[0] < b.box[2] and b.box[1] <= c[1] < b.box[3]
                     or b.one_camera and float(np.hypot(*(c[:2] - b.centroid_raw))) <= gate_px for b in blobs)
@@ -178,12 +181,13 @@ class TemporalDetector:
         self.one_cfg = one_camera or OneCameraConfig()
         self.gain: float | None = None
 
-    def detect(self, frame: StereoFrame, found: list[Blob], hints: F64 | None, coast: F64 | None = None
-               ) -> list[Blob]:
+    def detect(self, frame: StereoFrame, found: list[Blob], hints: F64 | None,
+               coast: Callable[[], F64] | None = None) -> list[Blob]:
         """All the frame's objects: those the stereo stages `found`, those of them near their background
         replaced by the temporal model's object over the changed region they lie in when that is larger,
         and the changed regions they do not touch verified as new objects, or as tracked objects the right
-        camera cannot see (coast: MultiTracker.coasting at this frame's pose; None: none such)."""
+        camera cannot see (coast: gives MultiTracker.coasting at this frame's pose, asked for only where a
+        region matches nowhere; None: none such)."""
         self.gain = None
         model = self.sub.left_background(frame.gimbal)
         if model is None:
@@ -204,7 +208,8 @@ class TemporalDetector:
             covered = [b for b in out if _overlap(b.box, box)]
             if covered and not all(self._near_background(b) for b in covered):
                 continue  # objects well clear of their background: their stereo outline holds
-            blob = self.verify(frame, box, bg, dev, g, hints, _unclaimed(coast, out, self.one_cfg.gate_px))
+            claims = None if coast is None else partial(_unclaimed, coast, out, self.one_cfg.gate_px)
+            blob = self.verify(frame, box, bg, dev, g, hints, claims)
             if blob is None or (covered and blob.area <= _union_area(covered)):
                 continue
             out = [b for b in out if all(b is not c for c in covered)] + [blob]
@@ -243,10 +248,10 @@ class TemporalDetector:
         return out
 
     def verify(self, frame: StereoFrame, box: Box, bg: F32, dev: F32, g: float, hints: F64 | None,
-               coast: F64 | None = None) -> Blob | None:
+               coast: Callable[[], F64] | None = None) -> Blob | None:
         """One changed region: its outline, the relit-texture test, its own disparity and the test that it
         does not lie behind the background; failing these, a tracked object the right camera cannot see
-        (coast: MultiTracker.coasting at this frame's pose; None: no such sightings; tracker.one_camera). A
+        (coast: gives MultiTracker.coasting at this frame's pose; None: no such sightings; tracker.one_camera). A
         match refused as behind the background is no evidence against it there: the sliver of a walker beside
         a post holds pixels whose learnt background is the post (endless:body, frames 2306-2314: refused so,
         they were lost again)."""
@@ -264,7 +269,7 @@ class TemporalDetector:
         fine = self.verifier.match_object(frame, box, obj, hint, radius, hint is not None)
         blob = None if fine is None else self._checked(frame, box, obj, gain, fine, hint, radius)
         if blob is None and coast is not None:
-            return self._left_only(frame, box, obj, gain, coast)
+            return self._left_only(frame, box, obj, gain, coast())
         return blob
 
     def _checked(self, frame: StereoFrame, box: Box, obj: BoolA, gain: float, fine: RegionMatch, hint: float | None,
