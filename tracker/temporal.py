@@ -304,21 +304,20 @@ class TemporalDetector:
         predicted position lies nearest its centroid, within the association gate, and the right camera
         cannot see at least `min_hidden` of the region at that track's held disparity
         (tracker.one_camera.hidden_from_right). Its disparity is the held one."""
-        coast = coast[coast[:, 3] < self.one_cfg.max_frames]
-        k = nearest_prediction(coast, mask_centroid(obj.view(np.uint8))[1] + box[:2], self.one_cfg)
+        rect, cfg = self.verifier.rect, self.one_cfg
+        coast = coast[coast[:, 3] < cfg.max_frames]
+        c_box = mask_centroid(obj.view(np.uint8))[1]
+        k = nearest_prediction(coast, c_box + box[:2], cfg)
         if k is None:
             return None
         d = float(coast[k, 2])
-        w = self.verifier.rect.rig.left.size[0]
-        ext = (box[0], box[1], min(box[2] + self.sub.bg.num_disparities, w), box[3])
+        ext = (box[0], box[1], min(box[2] + self.sub.bg.num_disparities, rect.rig.left.size[0]), box[3])
         cm = self.sub.correspondence(0, frame.gimbal, ext)
-        hidden = hidden_from_right(self.verifier.rect, box, obj, d, cm, ext, self.one_cfg)
-        if int(np.count_nonzero(hidden)) < self.one_cfg.min_hidden * int(np.count_nonzero(obj)):
+        hidden = hidden_from_right(rect, box, obj, d, cm, ext, cfg)
+        if int(np.count_nonzero(hidden)) < cfg.min_hidden * int(np.count_nonzero(obj)):
             return None
-        rect = self.verifier.rect
-        sigma = coast_sigma_px(d, float(coast[k, 4]), float(coast[k, 5]), rect.f * rect.b, self.one_cfg)
-        inner = cm.crop((0, 0, box[2] - box[0], box[3] - box[1]))
-        d_bg = background_disparity(inner, obj, mask_centroid(obj.view(np.uint8))[1])
+        sigma = coast_sigma_px(d, float(coast[k, 4]), float(coast[k, 5]), rect.f * rect.b, cfg)
+        d_bg = background_disparity(cm.crop((0, 0, box[2] - box[0], box[3] - box[1])), obj, c_box)
         return self._blob(box, obj, d, sigma, d_bg, 0.0, gain, True)
 
     def _blob(self, box: Box, obj: BoolA, d: float, sigma: float, d_bg: float, score: float, gain: float,
