@@ -21,7 +21,8 @@ def _pair(z_m: float, extent_px: tuple[float, float]):  # type: ignore[no-untype
     args = (np.array([x, y]), d, 0.05, 400, None, (0.0, 0.0), extent_px)
     flat = Localizer(rect).locate(*args)
     prior = SolidPrior(0.5, 0.3, rim_sigma_px=0.0, upright_sigma=0.0, upright_ratio=0.5, upright_ratio_sigma=0.3,
-                       upright_x_sigma=0.0)  # an upright body's own terms apart (tested below)
+                       upright_x_sigma=0.0, wide_ratio=0.5, wide_ratio_sigma=0.3)  # upright and wide bodies'
+    # own terms apart (tested below)
     solid = Localizer(rect, solid=prior).locate(*args)
     return flat, solid, rect
 
@@ -124,6 +125,25 @@ def test_an_upright_bodys_azimuth_sigma_is_a_share_of_its_height_in_place_of_the
     ball = loc(SolidPrior(upright_sigma=0.0, upright_x_sigma=0.005), (0.0, 0.0), (60.0, 60.0))
     bare = loc(SolidPrior(rim_sigma_px=0.0, upright_sigma=0.0), (rim, rim), (60.0, 60.0))
     assert np.allclose(ball.cov_world, bare.cov_world, rtol=1e-12, atol=0.0)
+
+
+def test_a_wide_body_has_its_own_depth_prior() -> None:
+    # a vehicle side-on (width >= 2 x height): ρ = wide_ratio ± wide_ratio_sigma of its seen height (its
+    # smaller extent); just under the aspect, the general ρ ± σ_ρ
+    rect = Rectifier(default_rig())
+    d = rect.f * rect.rig.baseline / 12.0
+    args = (np.array([360.0, 260.0]), d, 0.05, 4000, None, (0.0, 0.0))
+    prior = SolidPrior(0.5, 0.3, rim_sigma_px=0.0, wide_ratio=1.2, wide_ratio_sigma=0.25)
+    c = rect.rig.left.c
+    for extent, ratio, sigma in (((150.0, 75.0), 1.2, 0.25), ((149.0, 75.0), 0.5, 0.3)):
+        flat = Localizer(rect).locate(*args, extent)
+        solid = Localizer(rect, solid=prior).locate(*args, extent)
+        e = 75.0 * float(flat.rig[2]) / rect.f
+        moved = float(np.linalg.norm(solid.rig - c) - np.linalg.norm(flat.rig - c))
+        assert math.isclose(moved, 0.5 * ratio * e, rel_tol=1e-9), (extent, moved)
+        assert math.isclose(solid.sigma_r ** 2, flat.sigma_r ** 2 + (0.5 * sigma * e) ** 2, rel_tol=0.02)
+    assert prior.depth_ratio(40.0, 60.0) == (prior.upright_ratio, prior.upright_ratio_sigma)  # a person
+    assert prior.depth_ratio(60.0, 60.0) == (0.5, 0.3) and not prior.wide(0.0, 0.0)
 
 
 def test_upright_is_a_height_of_at_least_one_and_a_half_widths() -> None:
