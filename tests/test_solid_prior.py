@@ -93,11 +93,18 @@ def test_an_upright_body_has_its_own_depth_prior() -> None:
     d = rect.f * rect.rig.baseline / 10.0
     args = (np.array([360.0, 220.0]), d, 0.05, 400, None, (0.0, 0.0))
     prior = SolidPrior(0.5, 0.3, rim_sigma_px=0.0, upright_sigma=0.0, upright_ratio=0.36, upright_ratio_sigma=0.15)
+    _moved_by(rect, args, prior, (((60.0, 165.0), 0.36, 0.15), ((60.0, 60.0), 0.5, 0.3)))
+
+
+def _moved_by(rect: Rectifier, args: tuple[np.ndarray, float, float, int, None, tuple[float, float]], prior: SolidPrior,
+              cases: tuple[tuple[tuple[float, float], float, float], ...]) -> None:
+    """For each (seen extent (w, h) px, ρ, σ_ρ): the centre lies ρ/2 · e behind the flat point along the left
+    camera's ray and σ_r² grows by (σ_ρ/2 · e)², e the smaller extent in metres."""
     c = rect.rig.left.c
-    for extent, ratio, sigma in (((60.0, 165.0), 0.36, 0.15), ((60.0, 60.0), 0.5, 0.3)):
+    for extent, ratio, sigma in cases:
         flat = Localizer(rect).locate(*args, extent)
         solid = Localizer(rect, solid=prior).locate(*args, extent)
-        e = 60.0 * float(flat.rig[2]) / rect.f
+        e = min(extent) * float(flat.rig[2]) / rect.f
         moved = float(np.linalg.norm(solid.rig - c) - np.linalg.norm(flat.rig - c))
         assert math.isclose(moved, 0.5 * ratio * e, rel_tol=1e-9), (extent, moved)
         assert math.isclose(solid.sigma_r ** 2, flat.sigma_r ** 2 + (0.5 * sigma * e) ** 2, rel_tol=0.02)
@@ -134,14 +141,7 @@ def test_a_wide_body_has_its_own_depth_prior() -> None:
     d = rect.f * rect.rig.baseline / 12.0
     args = (np.array([360.0, 260.0]), d, 0.05, 4000, None, (0.0, 0.0))
     prior = SolidPrior(0.5, 0.3, rim_sigma_px=0.0, wide_ratio=1.2, wide_ratio_sigma=0.25)
-    c = rect.rig.left.c
-    for extent, ratio, sigma in (((150.0, 75.0), 1.2, 0.25), ((149.0, 75.0), 0.5, 0.3)):
-        flat = Localizer(rect).locate(*args, extent)
-        solid = Localizer(rect, solid=prior).locate(*args, extent)
-        e = 75.0 * float(flat.rig[2]) / rect.f
-        moved = float(np.linalg.norm(solid.rig - c) - np.linalg.norm(flat.rig - c))
-        assert math.isclose(moved, 0.5 * ratio * e, rel_tol=1e-9), (extent, moved)
-        assert math.isclose(solid.sigma_r ** 2, flat.sigma_r ** 2 + (0.5 * sigma * e) ** 2, rel_tol=0.02)
+    _moved_by(rect, args, prior, (((150.0, 75.0), 1.2, 0.25), ((149.0, 75.0), 0.5, 0.3)))
     assert prior.depth_ratio(40.0, 60.0) == (prior.upright_ratio, prior.upright_ratio_sigma)  # a person
     assert prior.depth_ratio(60.0, 60.0) == (0.5, 0.3) and not prior.wide(0.0, 0.0)
 
