@@ -41,7 +41,7 @@ def _car_track_ids() -> list[set[int]]:
 
 def test_a_car_split_by_a_post_at_the_left_border_keeps_its_track(monkeypatch: pytest.MonkeyPatch) -> None:
     assert all(frame == {1} for frame in _car_track_ids())
-    # without the rule its part at the border is searched anew (its centroid predicted on the post), found
-    # at a wrong disparity and lost: the part beyond the post starts a second track
+    # without the rule its part at the border is searched anew (its centroid predicted on the post) and is
+    # not found in frame 5: the part beyond the post starts a second track
     monkeypatch.setattr(verify, "_at_left_border", lambda *a: False)
     assert any(2 in frame for frame in _car_track_ids())

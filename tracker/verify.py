@@ -92,7 +92,8 @@ def _at_left_border(region: BoolA, box: Box, d: float) -> bool:
     where the right camera sees little or none of it (x < d) and a new object's search is cut short
     (Verifier._strips): there a track predicted within the region's bounding rectangle, though not on it,
     gives the disparity (the car of occlusion:body at the left border, split by the post, its centroid
-    predicted on the post: found anew at a wrong disparity for 5 frames; identity switches 2 -> 0).
+    predicted on the post: searched anew, it was not found in frame 5, and the part beyond the post
+    started a second track; identity switches 2 -> 0).
     Elsewhere such a hint may be another object's, or the region a part at another depth: taken anywhere,
     far plates split by the hedge lost their lower part (endless:plate, elevation errors of 1 deg)."""
     cols = np.flatnonzero(region.any(axis=0))
