@@ -163,9 +163,12 @@ class Localizer:
 
     def locate(self, centroid_rect: F64, disparity: float, disparity_sigma: float, area: int,
                gimbal: GimbalState | None, extra_px: tuple[float, float] = (0.0, 0.0),
-               extent_px: tuple[float, float] | None = None) -> Localization:
+               extent_px: tuple[float, float] | None = None, rim_px: tuple[float, float] | None = None
+               ) -> Localization:
         """extra_px: the centroid's further 1-σ (px) along x and y, where the target is seen only in part
-        (tracker.visibility). extent_px: the target's seen width and height (px), for the SolidPrior."""
+        (tracker.visibility). extent_px: the target's seen width and height (px), for the SolidPrior.
+        rim_px: the outline's 1-σ (px, x and y) from its rim's contrast (tracker.rim_contrast), in place of
+        the SolidPrior's fixed rim_sigma_px / √2 along each axis; None: that one."""
         x, y = float(centroid_rect[0]), float(centroid_rect[1])
         X_rig = self.rect.rect_to_rig(x, y, disparity)  # eq. (2)
         J = self.rect.rig_to_rect_jacobian(x, y, disparity)
@@ -177,11 +180,12 @@ class Localizer:
         person = False  # an upright body (SolidPrior.upright): its own x term and depth prior
         if self.solid is not None and extent_px is not None:
             s_rim = self.solid.rim_sigma_px / np.sqrt(2.0)  # the outline's sides on a curved, shaded rim
+            rx, ry = (s_rim, s_rim) if rim_px is None else rim_px
             w, h = extent_px
             person = self.solid.upright(w, h)
             upright = self.solid.upright_sigma * h if person else 0.0
-            S[0, 0] += (self.solid.upright_x_sigma * h) ** 2 if person else s_rim**2  # x: limbs or rim
-            S[1, 1] += s_rim**2 + max(upright**2 - extra_px[1] ** 2, 0.0)  # y: max(extra, upright)
+            S[0, 0] += (self.solid.upright_x_sigma * h) ** 2 if person else rx**2  # x: limbs or rim
+            S[1, 1] += ry**2 + max(upright**2 - extra_px[1] ** 2, 0.0)  # y: max(extra, upright)
         cov_rig = J @ S @ J.T + cal.scale_rel**2 * np.outer(X_rig, X_rig)  # f·b off by ε: X -> (1 + ε) X
         if self.solid is not None and extent_px is not None:
             X_rig, cov_rig = self._behind_face(X_rig, cov_rig, min(extent_px), self.solid.depth_ratio(*extent_px))

@@ -28,6 +28,7 @@ from tracker.one_camera import OneCameraConfig
 from tracker.outline import OutlineConfig, warped_outline_sigma_px
 from tracker.rectify import Rectifier
 from tracker.regions import hints_inside
+from tracker.rim_contrast import RimContrastConfig, faint_shares, rim_sigma_px
 from tracker.schedule import SigmaSchedule, SigmaTerms, VerifySchedule
 from tracker.segmentation import HeightHistory, outline_sigma_px
 from tracker.split import join_occluded, join_parts
@@ -112,6 +113,7 @@ class Pipeline:
         self.heights = HeightHistory()
         self.visibility = VisibilityConfig()
         self.outline = OutlineConfig()
+        self.rim_contrast = RimContrastConfig()
         self._last_gain = 1.0
         # the last frame, its objects, their track ids, its tracks' hints and all it was verified with
         self._done: tuple[StereoFrame, list[Blob], list[int], F64, F64] | None = None
@@ -221,11 +223,22 @@ class Pipeline:
         cx = with_gap_x(terms.centroid_px[0], terms.gap_x_px, self.localizer.solid, w, h)
         cy = terms.centroid_px[1]
         return self.localizer.locate(b.centroid_rect, b.disparity, max(b.disparity_sigma, terms.disparity_px),
-                                     b.area, frame.gimbal, (cx, float(np.hypot(cy, jump))), (float(w), float(h)))
+                                     b.area, frame.gimbal, (cx, float(np.hypot(cy, jump))), (float(w), float(h)),
+                                     terms.rim_px)
 
     def _sigma_terms(self, frame: StereoFrame, b: Blob, blobs: list[Blob]) -> SigmaTerms:
         extra, gap_x = self._centroid_extra(frame, b, blobs)
-        return SigmaTerms(self._disparity_sigma(frame, b), extra, gap_x)
+        return SigmaTerms(self._disparity_sigma(frame, b), extra, gap_x, self._rim_px(frame, b))
+
+    def _rim_px(self, frame: StereoFrame, b: Blob) -> tuple[float, float] | None:
+        """A solid body's outline's 1-σ (px, x and y) from its rim's contrast against the temporal model
+        (tracker.rim_contrast); None without a SolidPrior or a temporal model at this pose (cameras moving)."""
+        model = self.subtractor.left_background(frame.gimbal)
+        if self.localizer.solid is None or model is None:
+            return None
+        gain = self.temporal.gain or b.gain
+        shares = faint_shares(b.mask, b.box, frame.left, model[0], gain, self.rim_contrast)
+        return rim_sigma_px(shares, self.rim_contrast)
 
     def between_frames(self, deadline: float) -> None:
         """In real time, after a frame's results are out and before the next frame is due (`deadline`,

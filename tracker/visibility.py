@@ -92,8 +92,8 @@ def cut_and_skew(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, i
     mom = cv2.moments(m8, binaryImage=True)
     centre, half = (mom["m10"] / mom["m00"], mom["m01"] / mom["m00"]), (max(bw / 2.0, 1.0), max(bh / 2.0, 1.0))
     ring_px = (cv2.dilate(m8, _RING) > 0) & ~mask  # the 2-px ring inside the box
-    ring = _sides(ring_px, centre, half)
-    edge = _sides(mask & (cv2.erode(m8, _RING) == 0), centre, half)  # the outline's own 2-px rim
+    ring = sides(ring_px, centre, half)
+    edge = sides(mask & (cv2.erode(m8, _RING) == 0), centre, half)  # the outline's own 2-px rim
     nearer = bg_valid & (bg_disparity > disparity + cfg.nearer_px)
     hidden = right_shadow(nearer, bg_disparity, disparity)
     level = bg_valid & (bg_disparity > disparity - cfg.level_px)
@@ -196,7 +196,7 @@ def padded(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, int], p
     return out, (X0, Y0, X1, Y1)
 
 
-def _sides(pixels: BoolA, centre: tuple[float, float], half: tuple[float, float]
+def sides(pixels: BoolA, centre: tuple[float, float], half: tuple[float, float]
            ) -> list[tuple[NDArray[np.intp], NDArray[np.intp]]]:
     """The (rows, columns) of the pixels on each side (left, right, top, bottom) of a mask whose centroid
     is centre (x, y) and half extent half (x, y): by the larger of |dx| / half x and |dy| / half y."""

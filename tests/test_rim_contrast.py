@@ -1,0 +1,95 @@
+"""The outline's 1-σ from its rim's contrast (tracker.rim_contrast): a rim that stands out from the temporal
+model has no such term, a side whose rim is faint has side_px times its faint share, and the localiser takes
+that in place of the solid prior's fixed rim term."""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+
+from tracker.evaluation import target_prior
+from tracker.localize import Localizer, SolidPrior
+from tracker.pipeline import Pipeline
+from tracker.rectify import Rectifier
+from tracker.rim_contrast import RimContrastConfig, faint_shares, rim_sigma_px
+from tracker.sim.rig import default_rig
+from tracker.sim.scenarios import SimRig, get_scenario
+
+CFG = RimContrastConfig()
+
+
+def _disc(right_grey: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[int, int, int, int]]:
+    """A textured wall (B), and the frame: a disc of radius 20 px at grey 200 whose right half is
+    `right_grey`, on that wall; its mask over its box."""
+    rng = np.random.default_rng(3)
+    wall = rng.normal(90.0, 6.0, (120, 160)).clip(0, 255).astype(np.float32)
+    frame = wall.astype(np.uint8).copy()
+    cv2.circle(frame, (80, 60), 20, 200, -1)
+    half = np.zeros_like(frame)
+    cv2.circle(half, (80, 60), 20, 1, -1)
+    half[:, :81] = 0
+    frame[half > 0] = right_grey
+    box = (58, 38, 103, 83)
+    mask = np.zeros((box[3] - box[1], box[2] - box[0]), np.uint8)
+    cv2.circle(mask, (80 - box[0], 60 - box[1]), 20, 1, -1)
+    return frame, wall, mask.astype(bool), box
+
+
+def test_a_rim_that_stands_out_adds_nothing() -> None:
+    frame, wall, mask, box = _disc(200)
+    shares = faint_shares(mask, box, frame, wall, 1.0, CFG)
+    assert max(shares) < 0.02
+    assert max(rim_sigma_px(shares, CFG)) < 0.02
+
+
+def test_a_faint_side_widens_its_axis_by_half_its_term() -> None:
+    frame, wall, mask, box = _disc(100)  # the right half 10 grey levels off the wall: under 2 ε
+    left, right, top, bottom = faint_shares(mask, box, frame, wall, 1.0, CFG)
+    assert right > 0.9 and left < 0.02
+    assert 0.2 < top < 0.8 and 0.2 < bottom < 0.8  # their right halves
+    sx, sy = rim_sigma_px((left, right, top, bottom), CFG)
+    assert math.isclose(sx, math.hypot(CFG.side_px * left, CFG.side_px * right) / 2.0, rel_tol=1e-9)
+    assert 0.4 * CFG.side_px < sx < 0.51 * CFG.side_px and sy < sx
+    # at the frame's gain: the same wall under light 1.5 times as bright, the disc's right half too
+    bright = (frame.astype(np.float32) * 1.5).clip(0, 255).astype(np.uint8)
+    assert faint_shares(mask, box, bright, wall, 1.5, CFG)[1] > 0.9
+    assert faint_shares(mask, box, bright, wall, 1.0, CFG)[1] < 0.5  # the model's gain left out: wrong
+
+
+def test_the_localiser_takes_the_rims_sigma_in_place_of_the_fixed_one() -> None:
+    rect = Rectifier(default_rig())
+    base = (np.array([380.0, 200.0]), 12.0, 0.05, 400, None, (0.0, 0.0), (60.0, 80.0))  # not upright
+    loc = Localizer(rect, solid=SolidPrior(upright_sigma=0.0))
+    fixed = loc.locate(*base)
+    s = SolidPrior().rim_sigma_px / math.sqrt(2.0)
+    assert np.allclose(loc.locate(*base, rim_px=(s, s)).cov_world, fixed.cov_world, rtol=1e-12, atol=0.0)
+    sharp = loc.locate(*base, rim_px=(0.0, 0.0))
+    none = Localizer(rect, solid=SolidPrior(rim_sigma_px=0.0, upright_sigma=0.0)).locate(*base)
+    assert np.allclose(sharp.cov_world, none.cov_world, rtol=1e-12, atol=0.0)
+    assert fixed.sigma_theta > 1.5 * sharp.sigma_theta and fixed.sigma_phi > 1.5 * sharp.sigma_phi
+    faint_x = loc.locate(*base, rim_px=(0.8, 0.0))
+    assert faint_x.sigma_theta > fixed.sigma_theta and math.isclose(faint_x.sigma_phi, sharp.sigma_phi, rel_tol=0.05)
+
+
+def _rim_terms(name: str, frames: int) -> tuple[float, float]:
+    """The rim's 1-σ (px, x and y) of the pipeline's target in the last of a scenario's first frames."""
+    scenario = get_scenario(name)
+    sim = SimRig(scenario)
+    pipe = Pipeline(sim.rig, solid=target_prior(scenario))
+    pipe.learn_background(sim.background())
+    for _ in range(frames):
+        sf = sim.step()
+        res = pipe.step(sf.frame)
+    assert len(res.detections) == 1
+    terms = pipe._sigma_terms(sf.frame, res.detections[0].blob, [res.detections[0].blob])
+    assert terms.rim_px is not None
+    return terms.rim_px
+
+
+def test_a_lit_sphere_has_a_sharp_rim_and_a_walker_a_faint_one() -> None:
+    # approach:body: a sphere at 30 m over a darker hedge, its outline within 0.02 px rms of the truth's
+    assert max(_rim_terms("approach:body", 10)) < 0.1
+    # walk:body: a textured, shaded walker, its rim fading into the ground and the wall at places
+    assert max(_rim_terms("walk:body", 10)) > 0.15
