@@ -16,6 +16,7 @@ from tracker.visibility import (
     object_and_shadow,
     occluder_below,
     padded,
+    painted,
     with_objects,
 )
 
@@ -193,13 +194,14 @@ def test_another_object_nearer_than_the_target_cuts_it_and_a_farther_one_does_no
     assert disp is not None and ok is not None
     assert cut_sides(mask, box, SIZE, 9.0, disp, ok, CFG) == (0, 0)  # 10 columns off the target
     # with its occlusion shadow, 20 - 5 = 15 columns to its left, it reaches the target's right side
-    disp, ok = with_objects(bg, valid, box, object_and_shadow(at, crosser, 20.0, 5.0))
+    others = object_and_shadow(at, crosser, 20.0, 5.0)
+    disp, ok = with_objects(bg, valid, box, others)
     assert disp is not None and ok is not None and disp[50, 35] == 20.0 and disp[50, 34] == 5.0
-    assert cut_sides(mask, box, SIZE, 9.0, disp, ok, CFG) == (1, 0)
+    assert cut_sides(mask, box, SIZE, 9.0, disp, ok, CFG, painted(box, others)) == (1, 0)
     disp, ok = with_objects(bg, valid, box, object_and_shadow(at, crosser, 4.0, 3.0))  # behind the target
     assert cut_sides(mask, box, SIZE, 9.0, disp, ok, CFG) == (0, 0)
-    disp, ok = with_objects(None, None, box, object_and_shadow(at, crosser, 20.0, 5.0))  # cameras moving
-    assert cut_sides(mask, box, SIZE, 9.0, disp, ok, CFG) == (1, 0)
+    disp, ok = with_objects(None, None, box, others)  # cameras moving
+    assert cut_sides(mask, box, SIZE, 9.0, disp, ok, CFG, painted(box, others)) == (1, 0)
     assert with_objects(None, None, box, [((300, 300, 310, 310), crosser, 20.0)]) == (None, None)
 
 
@@ -221,3 +223,20 @@ def test_a_hedge_slightly_nearer_cuts_where_the_background_steps_and_the_ground_
     no_jump = bg.copy()
     no_jump[:70] = 6.5  # the background just behind the outline is not much farther: no step
     assert cut_sides(mask, box, SIZE, 7.0, no_jump, valid, CFG) == (0, 0)
+
+
+def test_below_only_a_background_stepping_forward_from_behind_the_target_cuts_it() -> None:
+    box = (100, 100, 160, 220)
+    mask = _person(box, slice(10, 70))  # the lowest row 69
+    valid = np.ones(mask.shape, bool)
+    bg = np.full(mask.shape, 3.0, np.float32)  # a far wall (disparity 3) behind the target at 9
+    bg[70:] = 12.0  # a hedge before it from the row below on: steps forward by 9 px
+    assert cut_sides(mask, box, SIZE, 9.0, bg, valid, CFG) == (0, 1)
+    # a steeper ground the target stands on, 0.25 px a row, read 2 px too near all over by the matcher:
+    # nearer than the target below it, but as near behind its lowest rows, 1.25 px over six rows
+    rows = np.arange(mask.shape[0], dtype=np.float32)[:, None]
+    ground = np.broadcast_to(11.0 + 0.25 * (rows - 69.0), mask.shape).astype(np.float32)
+    assert cut_sides(mask, box, SIZE, 9.0, ground, valid, CFG) == (0, 0)
+    wrong = bg.copy()
+    wrong[66:70, 20:40] = 12.0  # a blotch of the hedge's disparity behind the target's lowest 4 rows too
+    assert cut_sides(mask, box, SIZE, 9.0, wrong, valid, CFG) == (0, 0)

@@ -42,6 +42,7 @@ from tracker.visibility import (
     object_and_shadow,
     occluder_below,
     padded,
+    painted,
     unseen_below,
     with_objects,
 )
@@ -312,9 +313,11 @@ class Pipeline:
         cm = None if self.subtractor.moving else self.subtractor.correspondence(0, frame.gimbal, box)
         disp, valid = with_objects(None if cm is None else cm.disparity, None if cm is None else cm.valid, box, others)
         n = min(b.box[3] + 2, self.rig.left.size[1]) - box[1]  # cut_sides: the 2-px ring below, not the ground
+        objects = painted(box, others)
         cut, (sx, sy) = cut_and_skew(mask[:n], (box[0], box[1], box[2], box[1] + n), self.rig.left.size,
                                      b.disparity, None if disp is None else disp[:n],
-                                     None if valid is None else valid[:n], self.visibility)
+                                     None if valid is None else valid[:n], self.visibility,
+                                     None if objects is None else objects[:n])
         tall = occluder_below(mask, b.disparity, disp, valid, self.visibility) if cut[1] else None
         px, py = extra_sigma_px(b.mask, cut, self.visibility, tall) if any(cut) else (0.0, 0.0)
         ux, uy = unseen_below(mask, b.disparity, disp, valid, self.visibility)

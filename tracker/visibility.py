@@ -18,6 +18,8 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from tracker.bottom_edge import convex_tip, stepped_below
+
 BoolA = NDArray[np.bool_]
 F32 = NDArray[np.float32]
 _RING = np.ones((5, 5), np.uint8)
@@ -42,7 +44,7 @@ class VisibilityConfig:
     row to the next on the ground below a target (`unseen_below`; about 0.2 px a row, as above).
     convex_solidity, tip_rows: a bottom side that a nearer background meets is not cut where the outline is
     convex (its area at least convex_solidity of its hull's) and narrows to a tip within tip_rows rows below
-    its lowest one (`convex_tip`)."""
+    its lowest one (tracker.bottom_edge.convex_tip)."""
 
     kappa: float = 0.4
     nearer_px: float = 0.5
@@ -52,10 +54,12 @@ class VisibilityConfig:
     ground_step_px: float = 0.5
     convex_solidity: float = 0.9
     tip_rows: float = 4.0
+    step_px: float = 1.5
 
 
 def cut_sides(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, int], disparity: float,
-              bg_disparity: F32 | None, bg_valid: BoolA | None, cfg: VisibilityConfig) -> tuple[int, int]:
+              bg_disparity: F32 | None, bg_valid: BoolA | None, cfg: VisibilityConfig,
+              objects: BoolA | None = None) -> tuple[int, int]:
     """How many sides along x (left, right) and along y (top, bottom) the target is cut at: the mask meets
     that edge of the image (on the left, within the target's disparity of it plus 2 px: the right camera
     does not see those columns, so the stereo outline stops short of the edge) or, where the background's
@@ -70,12 +74,12 @@ def cut_sides(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, int]
     endless scene, 12 px, on the ring's bottom side too), and that band counts as hidden.
     mask: (h, w) over box (x0, y0, x1, y1), raw left pixels; size: the image's (width, height). Only the
     ring and band inside the box are looked at: pass the mask `padded`."""
-    return cut_and_skew(mask, box, size, disparity, bg_disparity, bg_valid, cfg)[0]
+    return cut_and_skew(mask, box, size, disparity, bg_disparity, bg_valid, cfg, objects)[0]
 
 
 def cut_and_skew(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, int], disparity: float,
-                 bg_disparity: F32 | None, bg_valid: BoolA | None, cfg: VisibilityConfig
-                 ) -> tuple[tuple[int, int], tuple[float, float]]:
+                 bg_disparity: F32 | None, bg_valid: BoolA | None, cfg: VisibilityConfig,
+                 objects: BoolA | None = None) -> tuple[tuple[int, int], tuple[float, float]]:
     """`cut_sides`, and how far (px, x and y) the centroid may move across the sides cut by a nearer or
     level background, which need not hide the target evenly: a board behind a bush's round top loses its
     lower left corner, and its centroid moves right, along x, though only its bottom side is cut (endless,
@@ -83,7 +87,15 @@ def cut_and_skew(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, i
     from the visible centroid, about as far as a cut side's extra 1-σ supposes (kappa times the visible
     extent that way); the centroid moves by that part's share of the whole area times its centroid's
     offset. The move's x is returned where a top or bottom side is cut, its y where a left or right one
-    is (the cut sides' own axis has `extra_sigma_px`)."""
+    is (the cut sides' own axis has `extra_sigma_px`).
+
+    Below the target a nearer or level background counts only where it steps forward from the background
+    behind the target's lowest pixels in that column (tracker.bottom_edge.stepped_below); other objects
+    painted in (`objects`, (h, w) bool over the box: `with_objects`, `painted`) and the right camera's
+    shadow band count as they are. On the left and right sides the learnt map is too often wrong for that
+    test: a nearer post's disparity runs on over the band left of it that the right camera does not see
+    (occlusion, frame 65: 13 px, the post's disparity less the wall's), so that the background behind a
+    target emerging there reads as near as the post itself."""
     x0, y0, _, _ = box
     w, h = size
     m8 = mask.view(np.uint8)
@@ -106,10 +118,16 @@ def cut_and_skew(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, i
     by_bg = [False] * 4
     for k, ((ys, xs), (ey, ex)) in enumerate(zip(ring, edge, strict=True)):
         need = cfg.min_share * xs.size
-        by_bg[k] = xs.size > 0 and (int(np.count_nonzero(hidden[ys, xs])) >= need or (
-            int(np.count_nonzero(level[ys, xs])) >= need
+        # below: an occluder's top edge, not the ground going on under the target
+        steps = stepped_below(m8, bg_disparity, bg_valid, ys, xs, cfg.step_px) if k == 3 and xs.size else (
+            np.ones(xs.size, bool))
+        if objects is not None:
+            steps |= objects[ys, xs]
+        hid = hidden[ys, xs] & (steps | ~nearer[ys, xs])
+        by_bg[k] = xs.size > 0 and (int(np.count_nonzero(hid)) >= need or (
+            int(np.count_nonzero(level[ys, xs] & steps)) >= need
             and int(np.count_nonzero(behind[ey, ex])) >= cfg.min_share * ex.size))
-    tip = convex_tip(mask, hidden | level, cfg) if by_bg[3] and not cut[3] else None
+    tip = convex_tip(mask, hidden | level, cfg.convex_solidity, cfg.tip_rows) if by_bg[3] and not cut[3] else None
     by_bg[3] &= tip is None
     for k in range(4):
         cut[k] |= by_bg[k]
@@ -119,65 +137,6 @@ def cut_and_skew(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, i
         sx, sy = (abs(sx) if by_bg[2] or by_bg[3] else 0.0, abs(sy) if by_bg[0] or by_bg[1] else 0.0)
         skew = (float(np.hypot(skew[0], sx)), float(np.hypot(skew[1], sy)))
     return (int(cut[0]) + int(cut[1]), int(cut[2]) + int(cut[3])), skew
-
-
-def convex_tip(mask: BoolA, hidden: BoolA, cfg: VisibilityConfig) -> tuple[float, float] | None:
-    """Whether the outline's bottom is a convex body's own, not a cut: where the outline is convex (its area at
-    least convex_solidity of its convex hull's) and its rows narrow downwards, a convex body goes on below its
-    lowest row at most until its sides, narrowing at least as fast as they do there, meet: D = w₀ / s rows,
-    w₀ the lowest row's pixels and s = (w₂ - w₀) / 2 the narrowing a row over the two rows above it, which
-    must narrow at each step on both sides (a cut side's lowest row is often short at one end, and a stray
-    pixel may hang below it). Where
-    D <= tip_rows that is its tip (a ball resting on a hedge's line seen from 30 m, its bottom rows 5, 8 and
-    10 px wide: D = 2). A smooth outline is a parabola about its lowest point, its width's square falling
-    linearly to 0 there: the cap below the lowest row is D' = w₀² / ((w₂² - w₀²) / 2) rows deep (0.67 for
-    that ball), its area 2/3 w₀ D', its centroid 2/5 D' below. The centroid's 1-σ (px, x and y) is the shift
-    that cap would make, divided by √3 (anything from none to all of it); None otherwise: the side may go
-    on beyond a cut (a walker's legs behind a hedge, rows as wide as those above them; a car's wheels, its
-    outline not convex). And the nearer background must touch the outline's bottom only at the tip: it lies
-    within 2 rows below each column's lowest pixel in at most w₁ + 2 columns, w₁ the second lowest row's
-    pixels (the columns a tip resting on a straight edge spans within those rows). An occluder's rounded top (a
-    bush) that hides a board's lower part leaves a visible part that narrows downwards too, but the bush
-    follows its whole lower outline, as does a background at about the target's depth, against which its
-    lower part may be lost (`cut_sides`). mask, hidden: (h, w) bool, the background that may hide the
-    target (nearer, with the columns the right camera does not see because of it, `right_shadow`, or at
-    about its depth) over the same box, at least 2 rows below the mask's lowest."""
-    m8 = mask.view(np.uint8)
-    bx, by, bw, bh = cv2.boundingRect(m8)
-    if bh < 3:
-        return None
-    rows = m8[by:by + bh, bx:bx + bw].sum(axis=1, dtype=np.int64)
-    w0, narrowing = float(rows[-1]), (float(rows[-3]) - float(rows[-1])) / 2.0
-    sub = m8[by + bh - 3:by + bh, bx:bx + bw] > 0  # the lowest three rows, top down
-    first, last = np.argmax(sub, axis=1), bw - 1 - np.argmax(sub[:, ::-1], axis=1)
-    # both sides move in at each step: a tip, not a cut side's lowest row short at one end or a stray pixel
-    if not (first[0] < first[1] < first[2] and last[0] > last[1] > last[2]) or w0 > cfg.tip_rows * narrowing:
-        return None
-    low = _lowest_rows(mask, by, bh, bx, bw)
-    cols = np.arange(bx, bx + bw)
-    below = np.zeros(bw, bool)
-    for k in (1, 2):  # the 2 rows below each column's lowest pixel
-        r = low + k
-        ok = r < hidden.shape[0]
-        below[ok] |= hidden[r[ok], cols[ok]]
-    if np.count_nonzero(below) > rows[-2] + 2:
-        return None
-    box = np.ascontiguousarray(m8[by:by + bh, bx:bx + bw])
-    contours, _ = cv2.findContours(box, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
-    hull = np.zeros_like(box)
-    cv2.fillConvexPoly(hull, cv2.convexHull(np.concatenate(contours)), 1)  # its pixels, as the mask's
-    area = float(rows.sum())
-    if area < cfg.convex_solidity * float(np.count_nonzero(hull)):
-        return None
-    # a smooth outline is a parabola about its lowest point: w² falls linearly to 0 there
-    depth = w0 * w0 / ((float(rows[-3]) ** 2 - w0 * w0) / 2.0)
-    cap = 2.0 / 3.0 * w0 * depth  # a parabolic segment's area, its centroid 2/5 of its depth from the chord
-    mom = cv2.moments(m8, binaryImage=True)
-    low = np.flatnonzero(m8[by + bh - 1])
-    dx = float(low.mean()) - mom["m10"] / mom["m00"]  # the cap lies under the lowest row's middle
-    dy = by + bh - 0.5 + 0.4 * depth - mom["m01"] / mom["m00"]
-    share = cap / (area + cap) / np.sqrt(3.0)
-    return abs(share * dx), abs(share * dy)
 
 
 def _hidden_shift(hid: BoolA, centre: tuple[float, float], extent: tuple[int, int], area: float, kappa: float
@@ -218,6 +177,19 @@ def with_objects(bg_disparity: F32 | None, bg_valid: BoolA | None, box: tuple[in
         dv[sub] = np.maximum(np.where(vv[sub], dv[sub], 0.0), d)
         vv[sub] = True
     return disp, valid
+
+
+def painted(box: tuple[int, int, int, int], others: list[tuple[tuple[int, int, int, int], BoolA, float]]
+            ) -> BoolA | None:
+    """Where the others' masks (box, mask, disparity each, as for `with_objects`) lie over box: (h, w) bool;
+    None where none does."""
+    x0, y0, x1, y1 = box
+    out = np.zeros((y1 - y0, x1 - x0), bool)
+    for (ox0, oy0, ox1, oy1), m, _ in others:
+        X0, Y0, X1, Y1 = max(ox0, x0), max(oy0, y0), min(ox1, x1), min(oy1, y1)
+        if X0 < X1 and Y0 < Y1:
+            out[Y0 - y0:Y1 - y0, X0 - x0:X1 - x0] |= m[Y0 - oy0:Y1 - oy0, X0 - ox0:X1 - ox0]
+    return out if out.any() else None
 
 
 def object_and_shadow(box: tuple[int, int, int, int], mask: BoolA, disparity: float, bg_disparity: float
