@@ -240,3 +240,17 @@ def test_below_only_a_background_stepping_forward_from_behind_the_target_cuts_it
     wrong = bg.copy()
     wrong[66:70, 20:40] = 12.0  # a blotch of the hedge's disparity behind the target's lowest 4 rows too
     assert cut_sides(mask, box, SIZE, 9.0, wrong, valid, CFG) == (0, 0)
+
+
+def test_the_ground_below_a_target_cut_at_its_side_does_not_move_it_along_y() -> None:
+    box = (100, 100, 160, 220)
+    mask = _person(box, slice(10, 70))  # columns 20-39, rows 10-69
+    valid = np.ones(mask.shape, bool)
+    bg = np.full(mask.shape, 3.0, np.float32)  # a far wall
+    rows = np.arange(mask.shape[0], dtype=np.float32)[:, None]
+    ground = np.broadcast_to(9.0 + 0.2 * (rows - 69.0), mask.shape)
+    bg[50:] = ground[50:]  # the ground it stands on, at its own depth below it: level, but no side it cuts
+    bg[:, :19] = 14.0  # a post before its left side
+    cut, (sx, sy) = cut_and_skew(mask, box, SIZE, 9.0, bg, valid, CFG)
+    assert cut == (1, 0) and sx == 0.0
+    assert sy < 0.5  # the post's ring is even about the centroid: no move along y

@@ -116,6 +116,7 @@ def cut_and_skew(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, i
     level = bg_valid & (bg_disparity > disparity - cfg.level_px)
     behind = bg_valid & (bg_disparity < disparity - cfg.jump_px)
     by_bg = [False] * 4
+    hiding = np.zeros_like(ring_px)  # the ring pixels beyond which the target may go on unseen
     for k, ((ys, xs), (ey, ex)) in enumerate(zip(ring, edge, strict=True)):
         need = cfg.min_share * xs.size
         # below: an occluder's top edge, not the ground going on under the target
@@ -123,17 +124,17 @@ def cut_and_skew(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, i
             np.ones(xs.size, bool))
         if objects is not None:
             steps |= objects[ys, xs]
-        hid = hidden[ys, xs] & (steps | ~nearer[ys, xs])
+        hid, lev = hidden[ys, xs] & (steps | ~nearer[ys, xs]), level[ys, xs] & steps
         by_bg[k] = xs.size > 0 and (int(np.count_nonzero(hid)) >= need or (
-            int(np.count_nonzero(level[ys, xs] & steps)) >= need
-            and int(np.count_nonzero(behind[ey, ex])) >= cfg.min_share * ex.size))
+            int(np.count_nonzero(lev)) >= need and int(np.count_nonzero(behind[ey, ex])) >= cfg.min_share * ex.size))
+        hiding[ys, xs] = hid | (lev & by_bg[k])  # a level background only on a side it cuts (not the ground)
     tip = convex_tip(mask, hidden | level, cfg.convex_solidity, cfg.tip_rows) if by_bg[3] and not cut[3] else None
     by_bg[3] &= tip is None
     for k in range(4):
         cut[k] |= by_bg[k]
     skew = (0.0, 0.0) if tip is None else tip
     if any(by_bg):
-        sx, sy = _hidden_shift(ring_px & (hidden | level), centre, (bw, bh), mom["m00"], cfg.kappa)
+        sx, sy = _hidden_shift(hiding, centre, (bw, bh), mom["m00"], cfg.kappa)
         sx, sy = (abs(sx) if by_bg[2] or by_bg[3] else 0.0, abs(sy) if by_bg[0] or by_bg[1] else 0.0)
         skew = (float(np.hypot(skew[0], sx)), float(np.hypot(skew[1], sy)))
     return (int(cut[0]) + int(cut[1]), int(cut[2]) + int(cut[3])), skew
