@@ -40,30 +40,28 @@ from numpy.typing import NDArray
 from tracker.visibility import sides
 
 BoolA = NDArray[np.bool_]
-F32 = NDArray[np.float32]
-U8 = NDArray[np.uint8]
-_NB = np.ones((3, 3), np.uint8)
+_RIM = np.ones((3, 3), np.uint8)  # a pixel with a neighbour outside the mask is on its rim
 
 
 @dataclass(frozen=True)
 class RimContrastConfig:
-    """faint_level: a rim pixel is faint where its residual |Γ - g B| is under this (grey levels); ref_share:
-    the faint share at which a side's 1-σ is rim_sigma_px (the walkers' median share, 0.34-0.41 on walk,
-    illumination, foliage and two-targets)."""
+    """faint_level: a rim pixel is faint where its residual |Γ - g B| is under this (grey levels); side_px: a
+    side's 1-σ (px) where all of its rim is faint (see the module's docstring)."""
 
     faint_level: float = 24.0
     side_px: float = 1.7
 
 
-def faint_shares(mask: BoolA, box: tuple[int, int, int, int], image: U8, background: F32, gain: float,
-                 cfg: RimContrastConfig) -> tuple[float, float, float, float]:
+def faint_shares(mask: BoolA, box: tuple[int, int, int, int], image: NDArray[np.uint8],
+                 background: NDArray[np.float32], gain: float, cfg: RimContrastConfig
+                 ) -> tuple[float, float, float, float]:
     """The share of each side's rim (left, right, top, bottom) that is faint: the mask's own 1-px rim (its
     pixels with a 3x3 neighbour outside it), split into sides about its centroid (tracker.visibility.sides).
     mask: (h, w) over box (x0, y0, x1, y1) of the left image `image` (H, W); background: the temporal model
     B (H, W) at gain 1. A side with no rim pixels has share 0."""
     x0, y0, x1, y1 = box
     m8 = mask.view(np.uint8)
-    rim = mask & (cv2.erode(m8, _NB, borderType=cv2.BORDER_CONSTANT, borderValue=0) == 0)
+    rim = mask & (cv2.erode(m8, _RIM, borderType=cv2.BORDER_CONSTANT, borderValue=0) == 0)
     mom = cv2.moments(m8, binaryImage=True)
     if mom["m00"] == 0:
         return 0.0, 0.0, 0.0, 0.0
