@@ -44,7 +44,9 @@ class VisibilityConfig:
     row to the next on the ground below a target (`unseen_below`; about 0.2 px a row, as above).
     convex_solidity, tip_rows: a bottom side that a nearer background meets is not cut where the outline is
     convex (its area at least convex_solidity of its hull's) and narrows to a tip within tip_rows rows below
-    its lowest one (tracker.bottom_edge.convex_tip)."""
+    its lowest one (tracker.bottom_edge.convex_tip). step_px: below the target, how much nearer (px) a
+    background must be than the farthest behind its lowest four pixels to hide it (the ground rises about
+    1.0 px over those six rows; tracker.bottom_edge.stepped_below)."""
 
     kappa: float = 0.4
     nearer_px: float = 0.5
