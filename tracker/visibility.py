@@ -12,13 +12,14 @@ nearer background hides the bottom, the target goes on at most that occluder's h
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from tracker.bottom_edge import convex_tip, stepped_below
+from tracker.bottom_edge import convex_tip, lowest_rows, stepped_below
 
 BoolA = NDArray[np.bool_]
 F32 = NDArray[np.float32]
@@ -168,15 +169,13 @@ def with_objects(bg_disparity: F32 | None, bg_valid: BoolA | None, box: tuple[in
     hides it as a nearer background does (two-targets: the crosser at 5 m before the target at 10 m, whose
     outline stopped at the crosser's shadow and put its centroid 8 px off). None, None without either."""
     x0, y0, x1, y1 = box
-    near = [(o, m, d) for o, m, d in others if o[0] < x1 and x0 < o[2] and o[1] < y1 and y0 < o[3]]
+    near = list(_overlaps(box, others))
     if not near:
         return bg_disparity, bg_valid
     disp = np.zeros((y1 - y0, x1 - x0), np.float32) if bg_disparity is None else bg_disparity.copy()
     valid = np.zeros(disp.shape, bool) if bg_valid is None else bg_valid.copy()
-    for (ox0, oy0, ox1, oy1), m, d in near:
-        X0, Y0, X1, Y1 = max(ox0, x0), max(oy0, y0), min(ox1, x1), min(oy1, y1)
-        sub = m[Y0 - oy0:Y1 - oy0, X0 - ox0:X1 - ox0]
-        dv, vv = disp[Y0 - y0:Y1 - y0, X0 - x0:X1 - x0], valid[Y0 - y0:Y1 - y0, X0 - x0:X1 - x0]
+    for at, sub, d in near:
+        dv, vv = disp[at], valid[at]
         dv[sub] = np.maximum(np.where(vv[sub], dv[sub], 0.0), d)
         vv[sub] = True
     return disp, valid
@@ -188,11 +187,20 @@ def painted(box: tuple[int, int, int, int], others: list[tuple[tuple[int, int, i
     None where none does."""
     x0, y0, x1, y1 = box
     out = np.zeros((y1 - y0, x1 - x0), bool)
-    for (ox0, oy0, ox1, oy1), m, _ in others:
+    for at, sub, _ in _overlaps(box, others):
+        out[at] |= sub
+    return out if out.any() else None
+
+
+def _overlaps(box: tuple[int, int, int, int], others: list[tuple[tuple[int, int, int, int], BoolA, float]]
+              ) -> Iterator[tuple[tuple[slice, slice], BoolA, float]]:
+    """For each of the others (box, mask, disparity) that overlaps box: where (rows, columns of box), its
+    mask there, and its disparity."""
+    x0, y0, x1, y1 = box
+    for (ox0, oy0, ox1, oy1), m, d in others:
         X0, Y0, X1, Y1 = max(ox0, x0), max(oy0, y0), min(ox1, x1), min(oy1, y1)
         if X0 < X1 and Y0 < Y1:
-            out[Y0 - y0:Y1 - y0, X0 - x0:X1 - x0] |= m[Y0 - oy0:Y1 - oy0, X0 - ox0:X1 - ox0]
-    return out if out.any() else None
+            yield (slice(Y0 - y0, Y1 - y0), slice(X0 - x0, X1 - x0)), m[Y0 - oy0:Y1 - oy0, X0 - ox0:X1 - ox0], d
 
 
 def object_and_shadow(box: tuple[int, int, int, int], mask: BoolA, disparity: float, bg_disparity: float
@@ -261,12 +269,6 @@ def extra_sigma_px(mask: BoolA, cut: tuple[int, int], cfg: VisibilityConfig, occ
     return sx, float(np.hypot(cfg.kappa * bh * np.sqrt(cut[1] - 1), 0.5 * occluder_px))
 
 
-def _lowest_rows(mask: BoolA, by: int, bh: int, bx: int, bw: int) -> NDArray[np.intp]:
-    """Each column's lowest mask row over the mask's bounding rectangle (x bx, y by, bw x bh); a column
-    with none counts as reaching its bottom."""
-    return np.asarray(by + bh - 1 - np.argmax(mask[by:by + bh, bx:bx + bw][::-1], axis=0))
-
-
 def occluder_below(mask: BoolA, disparity: float, bg_disparity: F32 | None, bg_valid: BoolA | None,
                    cfg: VisibilityConfig) -> float | None:
     """How tall (px) the nearer background is that hides the target's bottom: in each of the mask's
@@ -285,7 +287,7 @@ def occluder_below(mask: BoolA, disparity: float, bg_disparity: F32 | None, bg_v
     bx, by, bw, bh = cv2.boundingRect(mask.view(np.uint8))
     if bw == 0:
         return None
-    low = _lowest_rows(mask, by, bh, bx, bw)
+    low = lowest_rows(mask, by, bh, bx, bw)
     nearer = bg_valid[:, bx:bx + bw] & (bg_disparity[:, bx:bx + bw] > disparity + cfg.nearer_px)
     rows = np.arange(h)[:, None]
     below = (rows > low) & (rows <= low + 3)  # the ring below, where the occluder's top must be
@@ -320,7 +322,7 @@ def unseen_below(mask: BoolA, disparity: float, bg_disparity: F32 | None, bg_val
     bx, by, bw, bh = cv2.boundingRect(mask.view(np.uint8))
     if bw == 0:
         return 0.0, 0.0
-    low = _lowest_rows(mask, by, bh, bx, bw)  # the work is done over the mask's columns and the rows it may lose
+    low = lowest_rows(mask, by, bh, bx, bw)  # the work is done over the mask's columns and the rows it may lose
     top, end = int(low.min()) + 1, min(by + 2 * bh + 1, h)
     if top >= end:
         return 0.0, 0.0
