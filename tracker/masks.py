@@ -86,3 +86,60 @@ def change(key: U8, bg: NDArray[np.float32], g: float) -> NDArray[np.float32]:
 def strict_limit(dev: NDArray[np.float32], g: float, eps: int) -> NDArray[np.float32]:
     """ε + 3 g D: the change a pixel must exceed where the background itself moves by D on average."""
     return np.asarray(np.float32(eps) + np.float32(3.0 * g) * dev, np.float32)
+
+
+def texture_corr(key: U8, bg: NDArray[np.float32], mask: BoolA) -> float:
+    """Zero-mean normalised correlation of Γ and B over the mask's pixels (1: the same texture)."""
+    a = key[mask].astype(np.float64)
+    b = bg[mask].astype(np.float64)
+    a -= a.mean()
+    b -= b.mean()
+    den = float(np.sqrt((a @ a) * (b @ b)))
+    return float(a @ b) / den if den > 1e-9 else 1.0
+
+
+def local_corr(key: U8, bg: NDArray[np.float32], win: int = 7) -> NDArray[np.float32]:
+    """Zero-mean normalised correlation of Γ and B over the win x win window about each pixel (1: the same
+    texture; 1 where either is flat in the window, under 1 grey level rms: nothing tells them apart)."""
+    a, b = key.astype(np.float32), bg.astype(np.float32)
+    k = (win, win)
+    ma, mb = cv2.blur(a, k), cv2.blur(b, k)
+    va = cv2.blur(a * a, k) - ma * ma
+    vb = cv2.blur(b * b, k) - mb * mb
+    cab = cv2.blur(a * b, k) - ma * mb
+    flat = (va < 1.0) | (vb < 1.0)
+    return np.asarray(np.where(flat, 1.0, cab / np.sqrt(np.maximum(va * vb, 1e-6))), np.float32)
+
+
+def grown_by_change(key: U8, bg: NDArray[np.float32], other_at_d: U8, obj: BoolA, changed: BoolA, eps: int,
+                    max_corr: float = 0.6) -> BoolA:
+    """The outline `obj` grown into the changed pixels connected to it that are the object's surface too.
+
+    The temporal outline is drawn inside the region eq. (9) marks (with a two-pixel rim): a shadow falls on
+    unchanged background, and stays out so. Where the object's surface passes eq. (9) because the
+    background behind it is as smooth as it is, or nearly at its depth (a walker's far leg over the
+    ground it stands on, a car's plain side), the temporal model still sees it change. A changed pixel
+    (`changed`: |Γ - g B| past the strict limit) joins the outline where it is connected to it, the other
+    camera shows the same grey there at the object's own disparity d (`other_at_d`: that camera's image
+    sampled at each pixel shifted by d; |Γ - Θ_d| <= ε: a surface at the object's depth), and its
+    neighbourhood is not the background's own texture relit (`local_corr` at most `max_corr`), nor is each
+    connected part so added as a whole (`texture_corr`): a shadow by the object's feet lies at the ground's
+    depth where it touches it, and background uncovered where the object stood long (its model unlearnt
+    meanwhile) at the object's depth where it stood close before it."""
+    own = np.abs(key.astype(np.int16) - other_at_d.astype(np.int16)) <= eps
+    cand = changed & own & ~obj
+    if not cand.any():
+        return obj
+    cand &= local_corr(key, bg) <= max_corr
+    n, lab = cv2.connectedComponents((obj | cand).view(np.uint8), connectivity=8)
+    touching = np.zeros(n, bool)
+    touching[np.unique(lab[obj])] = True
+    touching[0] = False
+    added = cand & touching[lab]
+    n_add, parts = cv2.connectedComponents(added.view(np.uint8), connectivity=8)
+    out = obj.copy()
+    for k in range(1, n_add):  # a window across a shadow's edge mixes two gains and correlates poorly: the
+        part = parts == k  # band along it is one part of its own, the background's texture relit over it
+        if texture_corr(key, bg, part) <= max_corr:
+            out |= part
+    return out

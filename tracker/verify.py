@@ -20,7 +20,7 @@ from tracker.bgdepth import CorrespondenceMap
 from tracker.detect import Box, StereoSubtractor
 from tracker.disparity_sigma import part_disparities
 from tracker.frames import StereoFrame
-from tracker.masks import NEAR, key_mask, largest_component, temporal_outline
+from tracker.masks import NEAR, grown_by_change, key_mask, largest_component, temporal_outline
 from tracker.rectify import Rectifier
 from tracker.regions import background_disparity, hints_around, mask_centroid, nearest_hint, row_thirds
 from tracker.rim import DEFAULT_RIM, RimConfig, RimRecovery
@@ -251,11 +251,15 @@ class Verifier:
         hedge in 49 frames). The outline is the part and what the right key's region adds to it: through
         the right key's pixels, a region the left key alone sees (where a walker stood while the background
         was learnt: the temporal model still holds it) joined the outline and made it a false target."""
+        x0, y0, x1, y1 = box
         matched = self._temporal_outline(frame, box, model, None, m_left & free, found)[0]
         m_right = self.right_key_at(frame, box, d_hint)
         wide, gain, changed = self._temporal_outline(frame, box, model, None, (m_left | m_right) & free, found)
         if matched.any():  # what the right key adds to it (joined through it, a ghost the left key alone
             wide = largest_component(matched | (wide & m_right))  # sees would be taken in)
+        if int(np.count_nonzero(wide)) >= 4 * self.cfg.min_area_px:  # not a sliver: see grown_by_change
+            wide = grown_by_change(frame.left[y0:y1, x0:x1], model[0][y0:y1, x0:x1],
+                                   self.right_at_d(frame, box, d_hint), wide, changed & free, self.cfg.epsilon)
         if len(around) > 1:  # other tracks predicted about the region: keep the pixels at this one's d
             matched = own_pixels(self.rect, frame, box, matched, d_hint, around, self.cfg.min_area_px)
             wide = own_pixels(self.rect, frame, box, wide, d_hint, around, self.cfg.min_area_px)
@@ -376,6 +380,12 @@ class Verifier:
         box_r = (sx0, ry0, rx1 + 2, ry1)
         return Strips(rect, (x0, y0), (rx0, ry0, rx1, ry1), rect.rectify(frame.left, 0, box_r),
                        rect.rectify(frame.right, 1, box_r), rx0 - sx0, d_hi, clipped)
+
+    def right_at_d(self, frame: StereoFrame, box: Box, d: float) -> U8:
+        """The right image sampled at the left box's pixels shifted by disparity d (Θ_d, the box's shape)."""
+        ur, vr = self.rect.right_at(box, d)
+        return np.asarray(cv2.remap(frame.right, ur.astype(np.float32), vr.astype(np.float32), cv2.INTER_LINEAR,
+                                    borderMode=cv2.BORDER_REPLICATE), np.uint8)
 
     def right_key_at(self, frame: StereoFrame, box: Box, d: float) -> BoolA:
         """The right-key mask of eq. (9), sampled at the left box's pixels shifted by disparity d."""
