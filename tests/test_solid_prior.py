@@ -21,8 +21,8 @@ def _pair(z_m: float, extent_px: tuple[float, float]):  # type: ignore[no-untype
     args = (np.array([x, y]), d, 0.05, 400, None, (0.0, 0.0), extent_px)
     flat = Localizer(rect).locate(*args)
     prior = SolidPrior(0.5, 0.3, rim_sigma_px=0.0, upright_sigma=0.0, upright_ratio=0.5, upright_ratio_sigma=0.3,
-                       upright_x_sigma=0.0, wide_ratio=0.5, wide_ratio_sigma=0.3)  # upright and wide bodies'
-    # own terms apart (tested below)
+                       upright_x_sigma=0.0, wide_ratio=0.5, wide_ratio_sigma=0.3, upright_shift=0.0)
+    # upright and wide bodies' own terms apart (tested below)
     solid = Localizer(rect, solid=prior).locate(*args)
     return flat, solid, rect
 
@@ -92,7 +92,8 @@ def test_an_upright_body_has_its_own_depth_prior() -> None:
     rect = Rectifier(default_rig())
     d = rect.f * rect.rig.baseline / 10.0
     args = (np.array([360.0, 220.0]), d, 0.05, 400, None, (0.0, 0.0))
-    prior = SolidPrior(0.5, 0.3, rim_sigma_px=0.0, upright_sigma=0.0, upright_ratio=0.36, upright_ratio_sigma=0.15)
+    prior = SolidPrior(0.5, 0.3, rim_sigma_px=0.0, upright_sigma=0.0, upright_ratio=0.36, upright_ratio_sigma=0.15,
+                       upright_shift=0.0)
     _moved_by(rect, args, prior, (((60.0, 165.0), 0.36, 0.15), ((60.0, 60.0), 0.5, 0.3)))
 
 
@@ -197,3 +198,22 @@ def test_the_server_refuses_an_unknown_targets_setting_in_one_line(tmp_path) -> 
     assert p.returncode != 0 and "unknown targets 'round'; use auto, solid or flat" in p.stderr, p.stderr
     assert len(p.stderr.strip().splitlines()) == 1, p.stderr
     assert not (tmp_path / "d" / "tmeye.db").exists()  # nothing made
+
+
+def test_an_upright_bodys_centre_lies_above_its_silhouettes_centroid_unless_the_frame_cuts_it() -> None:
+    # a person seen whole: the centroid moved up by upright_shift times its seen height before eq. (2); one
+    # that meets the image's top or bottom edge (in_frame False), a ball, a car: not moved
+    rect = Rectifier(default_rig())
+    base = (np.array([380.0, 200.0]), 12.0, 0.05, 400, None, (0.0, 0.0))
+    moved, still = SolidPrior(upright_shift=0.03), SolidPrior(upright_shift=0.0)
+    person = Localizer(rect, solid=moved).locate(*base, (40.0, 120.0))
+    up = Localizer(rect, solid=still).locate(np.array([380.0, 200.0 - 0.03 * 120.0]), *base[1:], (40.0, 120.0))
+    assert np.allclose(person.rig, up.rig, rtol=0.0, atol=1e-12)
+    unmoved = Localizer(rect, solid=still).locate(*base, (40.0, 120.0))
+    assert person.phi > unmoved.phi + 1e-4
+    assert person.measured_world is not None and unmoved.measured_world is not None  # as measured: not moved up
+    assert np.allclose(person.measured_world, unmoved.world, rtol=0.0, atol=1e-12)
+    for extent, in_frame in (((40.0, 120.0), False), ((60.0, 60.0), True), ((150.0, 55.0), True)):
+        a = Localizer(rect, solid=moved).locate(*base, extent, None, in_frame)
+        b = Localizer(rect, solid=still).locate(*base, extent, None, in_frame)
+        assert np.allclose(a.rig, b.rig, rtol=0.0, atol=1e-12), extent

@@ -171,7 +171,9 @@ def score_frame(acc: _Acc, res: FrameResult, truth: FrameTruth, pipe: Pipeline, 
     acc.az.append(_deg(loc.theta - th_t))
     acc.el.append(float(np.degrees(loc.phi - ph_t)))
     if tt.surface_world is not None and _width_px(truth.ids_left, tt.target_id) > WIDE_PX:
-        acc.wide.append(_wide_errors(acc.az[-1], acc.el[-1], loc.theta, loc.phi, tt, pipe.localizer.origin))
+        meas = loc.world if loc.measured_world is None else loc.measured_world  # no upright shift
+        _, th_m, ph_m = spherical(meas - pipe.localizer.origin)
+        acc.wide.append(_wide_errors(acc.az[-1], acc.el[-1], th_m, ph_m, tt, pipe.localizer.origin))
     tiny = 1e-12  # a zero σ makes any error infinitely many σ
     acc.z_r.append((loc.r - r_t) / max(loc.sigma_r, tiny))
     acc.z_az.append(float(np.radians(acc.az[-1])) / max(loc.sigma_theta, tiny))
@@ -180,8 +182,10 @@ def score_frame(acc: _Acc, res: FrameResult, truth: FrameTruth, pipe: Pipeline, 
 
 def _wide_errors(az: float, el: float, theta: float, phi: float, tt: TargetTruth, origin: F64
                  ) -> tuple[float, ...]:
-    """A solid body's angle errors (deg) against three truth points: (az, el) against its volume centroid
-    (given), then against the mean of the surface the left camera sees, (1/N) Σ (c + ρ_p s_p), and against
+    """A solid body's angle errors (deg) against three truth points: (az, el) of the reported centre against
+    its volume centroid (given), then those of the measured point (theta, phi: on the centroid's own ray,
+    without a person's shift up to its volume centre; Localization.measured_world) against the mean of the
+    surface the left camera sees, (1/N) Σ (c + ρ_p s_p), and against
     the silhouette's point c + s̄ m̄ / |m̄| (ρ_p: unit ray of pixel p of the body's left silhouette, s_p: the
     distance to the surface along it; m̄: the silhouette's centroid (x̄_n, ȳ_n, 1) in the undistorted
     normalised plane, each pixel weighted by its area there; s̄: the same mean of s_p; tracker.sim.render.
