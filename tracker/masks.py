@@ -130,16 +130,33 @@ def grown_by_change(key: U8, bg: NDArray[np.float32], other_at_d: U8, obj: BoolA
     cand = changed & own & ~obj
     if not cand.any():
         return obj
-    cand &= local_corr(key, bg) <= max_corr
+    ys, xs = np.nonzero(cand)  # the windows about the candidates only
+    r = 3
+    y0, y1 = max(int(ys.min()) - r, 0), int(ys.max()) + r + 1
+    x0, x1 = max(int(xs.min()) - r, 0), int(xs.max()) + r + 1
+    cand[y0:y1, x0:x1] &= local_corr(key[y0:y1, x0:x1], bg[y0:y1, x0:x1], 2 * r + 1) <= max_corr
     n, lab = cv2.connectedComponents((obj | cand).view(np.uint8), connectivity=8)
     touching = np.zeros(n, bool)
     touching[np.unique(lab[obj])] = True
     touching[0] = False
     added = cand & touching[lab]
+    # a window across a shadow's edge mixes two gains and correlates poorly: the band along it is a part
+    # of its own, the background's texture relit over it as a whole
     n_add, parts = cv2.connectedComponents(added.view(np.uint8), connectivity=8)
-    out = obj.copy()
-    for k in range(1, n_add):  # a window across a shadow's edge mixes two gains and correlates poorly: the
-        part = parts == k  # band along it is one part of its own, the background's texture relit over it
-        if texture_corr(key, bg, part) <= max_corr:
-            out |= part
-    return out
+    keep = _parts_corr(key, bg, parts, n_add) <= max_corr
+    keep[0] = False
+    return np.asarray(obj | keep[parts])
+
+
+def _parts_corr(key: U8, bg: NDArray[np.float32], parts: NDArray[np.int32], n: int) -> NDArray[np.float64]:
+    """`texture_corr` of each labelled part (labels 1..n-1 of `parts`; 0 is none) at once, from its sums."""
+    at = np.flatnonzero(parts)  # the parts' pixels only (label 0 stays empty)
+    lab = parts.ravel()[at]
+    a, b = key.ravel()[at].astype(np.float64), bg.ravel()[at].astype(np.float64)
+    cnt = np.bincount(lab, minlength=n).astype(np.float64)
+    sa, sb = np.bincount(lab, a, n), np.bincount(lab, b, n)
+    saa, sbb, sab = np.bincount(lab, a * a, n), np.bincount(lab, b * b, n), np.bincount(lab, a * b, n)
+    c = np.maximum(cnt, 1.0)
+    va, vb, cab = saa - sa * sa / c, sbb - sb * sb / c, sab - sa * sb / c
+    den = np.sqrt(np.maximum(va * vb, 0.0))
+    return np.where(den > 1e-9, cab / np.where(den > 1e-9, den, 1.0), 1.0)
