@@ -6,12 +6,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from sim_helpers import run_frames
 
 import tracker.verify as verify
-from tracker.evaluation import target_prior
 from tracker.masks import grown_by_change, local_corr
-from tracker.pipeline import Pipeline
-from tracker.sim.scenarios import SimRig, get_scenario
 
 EPS = 12
 
@@ -30,7 +28,7 @@ def _scene() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def _changed(key: np.ndarray, bg: np.ndarray) -> np.ndarray:
-    return np.abs(key.astype(np.float32) - bg) > EPS
+    return np.asarray(np.abs(key.astype(np.float32) - bg) > EPS)
 
 
 def test_a_changed_part_at_the_objects_depth_joins_the_outline() -> None:
@@ -72,13 +70,7 @@ def _car_outline(frames: int, grow: bool, monkeypatch: pytest.MonkeyPatch) -> tu
     it misses, pixels off the car)."""
     if not grow:
         monkeypatch.setattr(verify, "grown_by_change", lambda key, bg, other, obj, changed, eps: obj)
-    scenario = get_scenario("occlusion:body")
-    sim = SimRig(scenario)
-    pipe = Pipeline(sim.rig, solid=target_prior(scenario))
-    pipe.learn_background(sim.background())
-    for _ in range(frames):
-        sf = sim.step()
-        res = pipe.step(sf.frame)
+    _, sf, res = run_frames("occlusion:body", frames)
     truth = sf.truth.ids_left == 1
     (det,) = [d for d in res.detections if d.track_id == res.primary_id]
     x0, y0, x1, y1 = det.blob.box

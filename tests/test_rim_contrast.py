@@ -8,14 +8,12 @@ import math
 
 import cv2
 import numpy as np
+from sim_helpers import run_frames
 
-from tracker.evaluation import target_prior
 from tracker.localize import Localizer, SolidPrior
-from tracker.pipeline import Pipeline
 from tracker.rectify import Rectifier
 from tracker.rim_contrast import RimContrastConfig, faint_shares, rim_sigma_px
 from tracker.sim.rig import default_rig
-from tracker.sim.scenarios import SimRig, get_scenario
 
 CFG = RimContrastConfig()
 
@@ -75,13 +73,7 @@ def test_the_localiser_takes_the_rims_sigma_in_place_of_the_fixed_one() -> None:
 
 def _rim_terms(name: str, frames: int) -> tuple[float, float]:
     """The rim's 1-σ (px, x and y) of the pipeline's target in the last of a scenario's first frames."""
-    scenario = get_scenario(name)
-    sim = SimRig(scenario)
-    pipe = Pipeline(sim.rig, solid=target_prior(scenario))
-    pipe.learn_background(sim.background())
-    for _ in range(frames):
-        sf = sim.step()
-        res = pipe.step(sf.frame)
+    pipe, sf, res = run_frames(name, frames)
     assert len(res.detections) == 1
     terms = pipe._sigma_terms(sf.frame, res.detections[0].blob, [res.detections[0].blob])
     assert terms.rim_px is not None
