@@ -111,8 +111,8 @@ def local_corr(key: U8, bg: NDArray[np.float32], win: int = 7) -> NDArray[np.flo
     return np.asarray(np.where(flat, 1.0, cab / np.sqrt(np.maximum(va * vb, 1e-6))), np.float32)
 
 
-def grown_by_change(key: U8, bg: NDArray[np.float32], other_at_d: U8, obj: BoolA, changed: BoolA, eps: int,
-                    max_corr: float = 0.6) -> BoolA:
+def grown_by_change(key: U8, bg: NDArray[np.float32], other_at_d: U8, other_at_bg: U8, obj: BoolA,
+                    changed: BoolA, eps: int, margin: int = 2, max_corr: float = 0.6) -> BoolA:
     """The outline `obj` grown into the changed pixels connected to it that are the object's surface too.
 
     The temporal outline is drawn inside the region eq. (9) marks (with a two-pixel rim): a shadow falls on
@@ -121,12 +121,17 @@ def grown_by_change(key: U8, bg: NDArray[np.float32], other_at_d: U8, obj: BoolA
     ground it stands on, a car's plain side), the temporal model still sees it change. A changed pixel
     (`changed`: |Γ - g B| past the strict limit) joins the outline where it is connected to it, the other
     camera shows the same grey there at the object's own disparity d (`other_at_d`: that camera's image
-    sampled at each pixel shifted by d; |Γ - Θ_d| <= ε: a surface at the object's depth), and its
+    sampled at each pixel shifted by d; |Γ - Θ_d| <= ε: a surface at the object's depth) better, by more
+    than `margin` grey levels, than at the learnt background's (`other_at_bg`, eq. (9)'s Θ: a background
+    the model learnt with a target standing in it shows as change where the target left, and at the
+    target's depth too where the learnt geometry holds it: startup, a walker in view from frame 0), and its
     neighbourhood is not the background's own texture relit (`local_corr` at most `max_corr`), nor is each
     connected part so added as a whole (`texture_corr`): a shadow by the object's feet lies at the ground's
     depth where it touches it, and background uncovered where the object stood long (its model unlearnt
     meanwhile) at the object's depth where it stood close before it."""
-    own = np.abs(key.astype(np.int16) - other_at_d.astype(np.int16)) <= eps
+    k = key.astype(np.int16)
+    r_d = np.abs(k - other_at_d.astype(np.int16))
+    own = (r_d <= eps) & (np.abs(k - other_at_bg.astype(np.int16)) > r_d + margin)
     cand = changed & own & ~obj
     if not cand.any():
         return obj
