@@ -20,7 +20,8 @@ from tracker.bgdepth import CorrespondenceMap
 from tracker.detect import Box, StereoSubtractor
 from tracker.disparity_sigma import part_disparities
 from tracker.frames import StereoFrame
-from tracker.masks import NEAR, grown_by_change, key_mask, largest_component, temporal_outline
+from tracker.growth import grow_tracked
+from tracker.masks import NEAR, key_mask, largest_component, temporal_outline
 from tracker.rectify import Rectifier
 from tracker.regions import background_disparity, hints_around, mask_centroid, nearest_hint, row_thirds
 from tracker.rim import DEFAULT_RIM, RimConfig, RimRecovery
@@ -256,8 +257,8 @@ class Verifier:
         wide, gain, changed = self._temporal_outline(frame, box, model, None, (m_left | m_right) & free, found)
         if matched.any():  # what the right key adds to it (joined through it, a ghost the left key alone
             wide = largest_component(matched | (wide & m_right))  # sees would be taken in)
-        if int(np.count_nonzero(wide)) >= 4 * self.cfg.min_area_px:  # not a sliver: see grown_by_change
-            wide = self._grown(frame, box, model[0], wide, changed & free, d_hint)
+        if int(np.count_nonzero(wide)) >= 4 * self.cfg.min_area_px:  # not a sliver: see growth.grown_by_change
+            wide = grow_tracked(self.sub, self.rect, frame, box, model[0], wide, changed & free, d_hint)
         if len(around) > 1:  # other tracks predicted about the region: keep the pixels at this one's d
             matched = own_pixels(self.rect, frame, box, matched, d_hint, around, self.cfg.min_area_px)
             wide = own_pixels(self.rect, frame, box, wide, d_hint, around, self.cfg.min_area_px)
@@ -378,31 +379,6 @@ class Verifier:
         box_r = (sx0, ry0, rx1 + 2, ry1)
         return Strips(rect, (x0, y0), (rx0, ry0, rx1, ry1), rect.rectify(frame.left, 0, box_r),
                        rect.rectify(frame.right, 1, box_r), rx0 - sx0, d_hi, clipped)
-
-    def _grown(self, frame: StereoFrame, box: Box, bg: F32, obj: BoolA, changed: BoolA, d: float) -> BoolA:
-        """masks.grown_by_change of an outline over the box, worked out over the changed pixels' bounding
-        rectangle and 4 px about it only (what joins does so through them; the 7 x 7 windows about them)."""
-        ys, xs = np.nonzero(changed & ~obj)
-        if xs.size == 0:
-            return obj
-        h, w = obj.shape
-        m = 4
-        sy0, sy1, sx0, sx1 = max(int(ys.min()) - m, 0), min(int(ys.max()) + m + 1, h), max(int(xs.min()) - m, 0), min(
-            int(xs.max()) + m + 1, w)
-        sub = (box[0] + sx0, box[1] + sy0, box[0] + sx1, box[1] + sy1)
-        cm = self.sub.correspondence(0, frame.gimbal, sub)
-        at_bg = cv2.remap(frame.right, cm.map_x, cm.map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-        out = obj.copy()
-        out[sy0:sy1, sx0:sx1] = grown_by_change(
-            frame.left[sub[1]:sub[3], sub[0]:sub[2]], bg[sub[1]:sub[3], sub[0]:sub[2]], self.right_at_d(frame, sub, d),
-            np.asarray(at_bg, np.uint8), obj[sy0:sy1, sx0:sx1], changed[sy0:sy1, sx0:sx1], self.cfg.epsilon)
-        return out
-
-    def right_at_d(self, frame: StereoFrame, box: Box, d: float) -> U8:
-        """The right image sampled at the left box's pixels shifted by disparity d (Θ_d, the box's shape)."""
-        ur, vr = self.rect.right_at(box, d)
-        return np.asarray(cv2.remap(frame.right, ur.astype(np.float32), vr.astype(np.float32), cv2.INTER_LINEAR,
-                                    borderMode=cv2.BORDER_REPLICATE), np.uint8)
 
     def right_key_at(self, frame: StereoFrame, box: Box, d: float) -> BoolA:
         """The right-key mask of eq. (9), sampled at the left box's pixels shifted by disparity d."""

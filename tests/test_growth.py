@@ -1,4 +1,4 @@
-"""An outline grown into the pixels the temporal model sees changed (tracker.masks.grown_by_change): a part of
+"""An outline grown into the pixels the temporal model sees changed (tracker.growth.grown_by_change): a part of
 the object that eq. (9) missed joins it, a shadow (the background's own texture, darker), a surface at
 another depth and a change not connected to the outline stay out."""
 
@@ -9,7 +9,7 @@ import pytest
 from sim_helpers import run_frames
 
 import tracker.verify as verify
-from tracker.masks import grown_by_change, local_corr
+from tracker.growth import grown_by_change, local_corr
 
 EPS = 12
 
@@ -82,7 +82,7 @@ def _outline(name: str, frames: int, grow: bool, monkeypatch: pytest.MonkeyPatch
     """A scenario's target's outline in the last of its first frames: (true pixels it holds, true pixels it
     misses, pixels off the target)."""
     if not grow:
-        monkeypatch.setattr(verify, "grown_by_change", lambda key, bg, other, at_bg, obj, changed, eps: obj)
+        monkeypatch.setattr(verify, "grow_tracked", lambda sub, rect, frame, box, bg, obj, changed, d: obj)
     _, sf, res = run_frames(name, frames)
     truth = sf.truth.ids_left == 1
     (det,) = [d for d in res.detections if d.track_id == res.primary_id]
