@@ -82,7 +82,7 @@ def _outline(name: str, frames: int, grow: bool, monkeypatch: pytest.MonkeyPatch
     """A scenario's target's outline in the last of its first frames: (true pixels it holds, true pixels it
     misses, pixels off the target)."""
     if not grow:
-        monkeypatch.setattr(verify, "grow_tracked", lambda sub, rect, frame, box, bg, obj, changed, d: obj)
+        monkeypatch.setattr(verify, "grow_tracked", lambda rect, frame, box, cm, bg, obj, changed, d, eps: obj)
     _, sf, res = run_frames(name, frames)
     truth = sf.truth.ids_left == 1
     (det,) = [d for d in res.detections if d.track_id == res.primary_id]

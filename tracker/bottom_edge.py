@@ -31,7 +31,7 @@ def stepped_below(m8: NDArray[np.uint8], bg: F32, valid: BoolA, ys: NDArray[np.i
     occluder upwards by a row or two (endless, a bush at 30 px of disparity, 2 rows over the top the
     scene's truth gives it)."""
     cols = np.flatnonzero(m8.any(axis=0))
-    low = m8.shape[0] - 1 - np.argmax(m8[::-1, cols], axis=0)  # each mask column's lowest row
+    low = lowest_rows(m8 > 0, 0, m8.shape[0], 0, m8.shape[1])[cols]  # each mask column's lowest row
     k = np.clip(np.searchsorted(cols, xs), 0, cols.size - 1)
     k = np.where((k > 0) & (np.abs(cols[k - 1] - xs) < np.abs(cols[k] - xs)), k - 1, k)  # the nearest column
     inside_y, inside_x = np.stack([np.maximum(low[k] - j, 0) for j in range(4)]), cols[k]

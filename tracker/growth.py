@@ -7,7 +7,8 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from tracker.detect import Box, StereoSubtractor
+from tracker.bgdepth import CorrespondenceMap
+from tracker.detect import Box
 from tracker.frames import StereoFrame
 from tracker.rectify import Rectifier
 
@@ -16,10 +17,11 @@ F32 = NDArray[np.float32]
 BoolA = NDArray[np.bool_]
 
 
-def grow_tracked(sub: StereoSubtractor, rect: Rectifier, frame: StereoFrame, box: Box, bg: F32, obj: BoolA,
-                 changed: BoolA, d: float) -> BoolA:
-    """`grown_by_change` of an outline `obj` over the raw-left box at the body's disparity d (px): bg is the
-    temporal background B (full image), changed the box's changed pixels it may take. Worked out over the
+def grow_tracked(rect: Rectifier, frame: StereoFrame, box: Box, cm: CorrespondenceMap, bg: F32, obj: BoolA,
+                 changed: BoolA, d: float, eps: int) -> BoolA:
+    """`grown_by_change` of an outline `obj` over the raw-left box at the body's disparity d (px): cm is the
+    box's correspondence map (eq. 9's), bg the temporal background B (full image), changed the box's changed
+    pixels it may take, eps eq. (9)'s ε. Worked out over the
     candidates' bounding rectangle and 4 px about it only (what joins does so through them; the 7 x 7
     windows about them)."""
     ys, xs = np.nonzero(changed & ~obj)
@@ -30,12 +32,12 @@ def grow_tracked(sub: StereoSubtractor, rect: Rectifier, frame: StereoFrame, box
     sy0, sy1 = max(int(ys.min()) - m, 0), min(int(ys.max()) + m + 1, h)
     sx0, sx1 = max(int(xs.min()) - m, 0), min(int(xs.max()) + m + 1, w)
     x0, y0, x1, y1 = part = (box[0] + sx0, box[1] + sy0, box[0] + sx1, box[1] + sy1)
-    cm = sub.correspondence(0, frame.gimbal, part)
-    at_bg = cv2.remap(frame.right, cm.map_x, cm.map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    at = cm.crop((sx0, sy0, sx1, sy1))
+    at_bg = cv2.remap(frame.right, at.map_x, at.map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
     out = obj.copy()
     out[sy0:sy1, sx0:sx1] = grown_by_change(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1],
                                             right_at_d(rect, frame, part, d), np.asarray(at_bg, np.uint8),
-                                            obj[sy0:sy1, sx0:sx1], changed[sy0:sy1, sx0:sx1], sub.cfg.epsilon)
+                                            obj[sy0:sy1, sx0:sx1], changed[sy0:sy1, sx0:sx1], eps)
     return out
 
 

@@ -177,8 +177,9 @@ class Localizer:
         """extra_px: the centroid's further 1-σ (px) along x and y, where the target is seen only in part
         (tracker.visibility). extent_px: the target's seen width and height (px), for the SolidPrior.
         rim_px: the outline's 1-σ (px, x and y) from its rim's contrast (tracker.rim_contrast), in place of
-        the SolidPrior's fixed rim_sigma_px / √2 along each axis; None: that one. in_frame: the outline meets
-        neither the image's top nor its bottom (an upright body's shift, SolidPrior)."""
+        the SolidPrior's fixed rim_sigma_px / √2 along each axis; None: that one. in_frame: the target is cut
+        by neither the image's top nor its bottom (tracker.pipeline: its verified box reaches neither; an
+        upright body's shift, SolidPrior)."""
         x, y = float(centroid_rect[0]), float(centroid_rect[1])
         X_meas = self.rect.rect_to_rig(x, y, disparity)  # eq. (2)
         X_rig = X_meas

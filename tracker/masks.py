@@ -86,13 +86,3 @@ def change(key: U8, bg: NDArray[np.float32], g: float) -> NDArray[np.float32]:
 def strict_limit(dev: NDArray[np.float32], g: float, eps: int) -> NDArray[np.float32]:
     """ε + 3 g D: the change a pixel must exceed where the background itself moves by D on average."""
     return np.asarray(np.float32(eps) + np.float32(3.0 * g) * dev, np.float32)
-
-
-def texture_corr(key: U8, bg: NDArray[np.float32], mask: BoolA) -> float:
-    """Zero-mean normalised correlation of Γ and B over the mask's pixels (1: the same texture)."""
-    a = key[mask].astype(np.float64)
-    b = bg[mask].astype(np.float64)
-    a -= a.mean()
-    b -= b.mean()
-    den = float(np.sqrt((a @ a) * (b @ b)))
-    return float(a @ b) / den if den > 1e-9 else 1.0

@@ -223,7 +223,7 @@ class Pipeline:
         jump = self.heights.sigma_px(track_id, frame.index, float(h), b.disparity)
         cx = with_gap_x(terms.centroid_px[0], terms.gap_x_px, self.localizer.solid, w, h)
         cy = terms.centroid_px[1]
-        in_frame = b.box[1] > 0 and b.box[3] < self.rig.left.size[1]  # not cut by the image's top or bottom
+        in_frame = b.box[1] > 0 and b.box[3] < self.rig.left.size[1]  # its box reaches neither top nor bottom
         return self.localizer.locate(b.centroid_rect, b.disparity, max(b.disparity_sigma, terms.disparity_px),
                                      b.area, frame.gimbal, (cx, float(np.hypot(cy, jump))), (float(w), float(h)),
                                      terms.rim_px, in_frame)

@@ -36,7 +36,7 @@ from numpy.typing import NDArray
 
 from tracker.detect import Box, StereoSubtractor
 from tracker.frames import StereoFrame
-from tracker.masks import largest_region, temporal_outline, texture_corr
+from tracker.masks import largest_region, temporal_outline
 from tracker.one_camera import OneCameraConfig, coast_sigma_px, hidden_from_right, nearest_prediction
 from tracker.rectify import Rectifier
 from tracker.regions import background_disparity, mask_centroid, nearest_hint
@@ -87,6 +87,16 @@ def change_mask(key: U8, bg: F32, dev: F32, g: float, eps: int) -> U8:
     gf = np.float32(g)
     out = (k > gf * hi + lim) | (k < gf * lo - lim)
     return out.astype(np.uint8) * np.uint8(255)
+
+
+def texture_corr(key: U8, bg: F32, mask: NDArray[np.bool_]) -> float:
+    """Zero-mean normalised correlation of Γ and B over the mask's pixels (1: the same texture)."""
+    a = key[mask].astype(np.float64)
+    b = bg[mask].astype(np.float64)
+    a -= a.mean()
+    b -= b.mean()
+    den = float(np.sqrt((a @ a) * (b @ b)))
+    return float(a @ b) / den if den > 1e-9 else 1.0
 
 
 _WIN = (5, 5)

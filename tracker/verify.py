@@ -204,7 +204,7 @@ class Verifier:
         gain, changed, matched = 1.0, None, None
         model = self.sub.left_background(frame.gimbal)
         if model is not None and d_hint is not None:  # a tracked object, cameras still
-            obj, matched, gain, changed = self._tracked_outline(frame, box, model, m_left, d_hint, free,
+            obj, matched, gain, changed = self._tracked_outline(frame, box, cm, model, m_left, d_hint, free,
                                                                 around, found)
             d0 = d_hint
         else:
@@ -239,8 +239,8 @@ class Verifier:
         return Blob(box, obj, area, c_raw, np.array([sx / sa, sy / sa]), fine.disparity, fine.sigma, d_bg,
                     fine.score, gain), changed
 
-    def _tracked_outline(self, frame: StereoFrame, box: Box, model: tuple[F32, F32], m_left: BoolA, d_hint: float,
-                         free: BoolA, around: list[float], found: list[Blob] | None
+    def _tracked_outline(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap, model: tuple[F32, F32],
+                         m_left: BoolA, d_hint: float, free: BoolA, around: list[float], found: list[Blob] | None
                          ) -> tuple[BoolA, BoolA, float, BoolA]:
         """A tracked object's outline with the cameras still, the part of it its disparity is matched on, the
         outline's gain and the box's changed pixels. The temporal model draws the part inside the left-key
@@ -258,7 +258,7 @@ class Verifier:
         if matched.any():  # what the right key adds to it (joined through it, a ghost the left key alone
             wide = largest_component(matched | (wide & m_right))  # sees would be taken in)
         if int(np.count_nonzero(wide)) >= 4 * self.cfg.min_area_px:  # not a sliver: see growth.grown_by_change
-            wide = grow_tracked(self.sub, self.rect, frame, box, model[0], wide, changed & free, d_hint)
+            wide = grow_tracked(self.rect, frame, box, cm, model[0], wide, changed & free, d_hint, self.cfg.epsilon)
         if len(around) > 1:  # other tracks predicted about the region: keep the pixels at this one's d
             matched = own_pixels(self.rect, frame, box, matched, d_hint, around, self.cfg.min_area_px)
             wide = own_pixels(self.rect, frame, box, wide, d_hint, around, self.cfg.min_area_px)
