@@ -12,6 +12,8 @@ from tracker.visibility import (
     VisibilityConfig,
     cut_and_skew,
     cut_sides,
+    cut_sigma_px,
+    cuts,
     extra_sigma_px,
     object_and_shadow,
     occluder_below,
@@ -254,3 +256,26 @@ def test_the_ground_below_a_target_cut_at_its_side_does_not_move_it_along_y() ->
     cut, (sx, sy) = cut_and_skew(mask, box, SIZE, 9.0, bg, valid, CFG)
     assert cut == (1, 0) and sx == 0.0
     assert sy < 0.5  # the post's ring is even about the centroid: no move along y
+
+
+def test_an_occluder_below_bounds_the_bottoms_term_only_where_it_cuts_the_bottom() -> None:
+    """A target 20 x 21 px whose top right meets a post's learnt disparity, which runs on down past it and
+    under its own right part (the learnt map's band left of a post, seen from the pivot): the top and the
+    right side are cut, the bottom is not (no step forward below it). The 58 px of post below would have
+    made the y 1-σ 29 px; the top's own term is kappa times the visible height."""
+    box, shape = (100, 100, 160, 200), (100, 60)
+    mask = np.zeros(shape, bool)
+    mask[20:41, 20:41] = True
+    bg = np.full(shape, 3.0, np.float32)
+    bg[:, 32:46] = 9.0  # nearer than the target (6.0)
+    valid = np.ones(shape, bool)
+    c = cuts(mask, box, SIZE, 6.0, bg, valid, CFG)
+    assert c.sides == (False, True, True, False) and not c.bottom_by_background
+    tall = occluder_below(mask, 6.0, bg, valid, CFG)
+    assert tall is not None and tall > 50  # what the map offers below: not the bottom's bound here
+    assert cut_sigma_px(mask, c, CFG, tall) == extra_sigma_px(mask, (1, 1), CFG) == (CFG.kappa * 21, CFG.kappa * 21)
+    bg[:, 32:46] = 3.0
+    bg[41:, 20:41] = 9.0  # a hedge below the whole target, from the row under it: the bottom is cut by it
+    c = cuts(mask, box, SIZE, 6.0, bg, valid, CFG)
+    assert c.sides == (False, False, False, True) and c.bottom_by_background
+    assert cut_sigma_px(mask, c, CFG, occluder_below(mask, 6.0, bg, valid, CFG)) == (0.0, 29.5)

@@ -37,8 +37,8 @@ from tracker.tracks import MultiTracker, TrackerConfig
 from tracker.verify import Blob, Verifier
 from tracker.visibility import (
     VisibilityConfig,
-    cut_and_skew,
-    extra_sigma_px,
+    cut_sigma_px,
+    cuts,
     object_and_shadow,
     occluder_below,
     padded,
@@ -315,12 +315,12 @@ class Pipeline:
         disp, valid = with_objects(None if cm is None else cm.disparity, None if cm is None else cm.valid, box, others)
         n = min(b.box[3] + 2, self.rig.left.size[1]) - box[1]  # cut_sides: the 2-px ring below, not the ground
         objects = painted(box, others)
-        cut, (sx, sy) = cut_and_skew(mask[:n], (box[0], box[1], box[2], box[1] + n), self.rig.left.size,
-                                     b.disparity, None if disp is None else disp[:n],
-                                     None if valid is None else valid[:n], self.visibility,
-                                     None if objects is None else objects[:n])
-        tall = occluder_below(mask, b.disparity, disp, valid, self.visibility) if cut[1] else None
-        px, py = extra_sigma_px(b.mask, cut, self.visibility, tall) if any(cut) else (0.0, 0.0)
+        seen = cuts(mask[:n], (box[0], box[1], box[2], box[1] + n), self.rig.left.size, b.disparity,
+                    None if disp is None else disp[:n], None if valid is None else valid[:n], self.visibility,
+                    None if objects is None else objects[:n])
+        sx, sy = seen.skew
+        tall = occluder_below(mask, b.disparity, disp, valid, self.visibility) if seen.bottom_by_background else None
+        px, py = cut_sigma_px(b.mask, seen, self.visibility, tall)
         ux, uy = unseen_below(mask, b.disparity, disp, valid, self.visibility)
         return float(np.sqrt(px * px + sx * sx + ux * ux)), float(np.sqrt(py * py + sy * sy + uy * uy))
 

@@ -80,10 +80,35 @@ def cut_sides(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, int]
     return cut_and_skew(mask, box, size, disparity, bg_disparity, bg_valid, cfg, objects)[0]
 
 
+@dataclass(frozen=True)
+class Cuts:
+    """Which sides (left, right, top, bottom) a target is cut at (`cut_sides`' rules), and the centroid's
+    move across them (px, x and y; `cut_and_skew`). bottom_by_background: the bottom is cut by a nearer
+    or level background (not the image's edge): an occluder below, which `occluder_below` measures."""
+
+    sides: tuple[bool, bool, bool, bool]
+    skew: tuple[float, float]
+    bottom_by_background: bool = False
+
+    @property
+    def counts(self) -> tuple[int, int]:
+        """How many sides along x (left, right) and along y (top, bottom) are cut."""
+        left, right, top, bottom = self.sides
+        return int(left) + int(right), int(top) + int(bottom)
+
+
 def cut_and_skew(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, int], disparity: float,
                  bg_disparity: F32 | None, bg_valid: BoolA | None, cfg: VisibilityConfig,
                  objects: BoolA | None = None) -> tuple[tuple[int, int], tuple[float, float]]:
-    """`cut_sides`, and how far (px, x and y) the centroid may move across the sides cut by a nearer or
+    """`cut_sides` and the centroid's move across the cut sides (px, x and y): `cuts`, counted."""
+    c = cuts(mask, box, size, disparity, bg_disparity, bg_valid, cfg, objects)
+    return c.counts, c.skew
+
+
+def cuts(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, int], disparity: float,
+         bg_disparity: F32 | None, bg_valid: BoolA | None, cfg: VisibilityConfig,
+         objects: BoolA | None = None) -> Cuts:
+    """The sides `cut_sides` counts, and how far (px, x and y) the centroid may move across the sides cut by a nearer or
     level background, which need not hide the target evenly: a board behind a bush's round top loses its
     lower left corner, and its centroid moves right, along x, though only its bottom side is cut (endless,
     frames 1195-1244: 2.1 px). The hidden part is taken to go on beyond each ring pixel that hid it, away
@@ -104,11 +129,11 @@ def cut_and_skew(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, i
     m8 = mask.view(np.uint8)
     bx, by, bw, bh = cv2.boundingRect(m8)
     if bw == 0:
-        return (0, 0), (0.0, 0.0)
+        return Cuts((False, False, False, False), (0.0, 0.0))
     left_edge = int(np.ceil(max(disparity, 0.0))) + 2
     cut = [x0 + bx <= left_edge, x0 + bx + bw >= w, y0 + by <= 0, y0 + by + bh >= h]  # left, right, top, bottom
     if bg_disparity is None or bg_valid is None:
-        return (int(cut[0]) + int(cut[1]), int(cut[2]) + int(cut[3])), (0.0, 0.0)
+        return Cuts((cut[0], cut[1], cut[2], cut[3]), (0.0, 0.0))
     mom = cv2.moments(m8, binaryImage=True)
     centre, half = (mom["m10"] / mom["m00"], mom["m01"] / mom["m00"]), (max(bw / 2.0, 1.0), max(bh / 2.0, 1.0))
     ring_px = (cv2.dilate(m8, _RING) > 0) & ~mask  # the 2-px ring inside the box
@@ -140,7 +165,7 @@ def cut_and_skew(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, i
         sx, sy = _hidden_shift(hiding, centre, (bw, bh), mom["m00"], cfg.kappa)
         sx, sy = (abs(sx) if by_bg[2] or by_bg[3] else 0.0, abs(sy) if by_bg[0] or by_bg[1] else 0.0)
         skew = (float(np.hypot(skew[0], sx)), float(np.hypot(skew[1], sy)))
-    return (int(cut[0]) + int(cut[1]), int(cut[2]) + int(cut[3])), skew
+    return Cuts((cut[0], cut[1], cut[2], cut[3]), skew, by_bg[3])
 
 
 def _hidden_shift(hid: BoolA, centre: tuple[float, float], extent: tuple[int, int], area: float, kappa: float
@@ -267,6 +292,18 @@ def extra_sigma_px(mask: BoolA, cut: tuple[int, int], cfg: VisibilityConfig, occ
     if occluder_px is None or not cut[1]:
         return sx, cfg.kappa * bh * float(np.sqrt(cut[1]))
     return sx, float(np.hypot(cfg.kappa * bh * np.sqrt(cut[1] - 1), 0.5 * occluder_px))
+
+
+def cut_sigma_px(mask: BoolA, cuts: Cuts, cfg: VisibilityConfig, occluder_px: float | None = None
+                 ) -> tuple[float, float]:
+    """`extra_sigma_px` of the sides `cuts` counts, with the occluder's height (`occluder_below`) bounding
+    the bottom's term only where a nearer or level background cuts the bottom: with the top cut and the
+    bottom not, what lies below says nothing of how far the target goes on above (occlusion:plate, frames
+    59-90: a plate's top cut by the learnt map's band left of a post, which runs on 61 px below it, gave a
+    y 1-σ of 31 px, half of that, for kappa times its 29 px height, 12 px)."""
+    if not any(cuts.sides):
+        return 0.0, 0.0
+    return extra_sigma_px(mask, cuts.counts, cfg, occluder_px if cuts.bottom_by_background else None)
 
 
 def occluder_below(mask: BoolA, disparity: float, bg_disparity: F32 | None, bg_valid: BoolA | None,
