@@ -86,3 +86,16 @@ def change(key: U8, bg: NDArray[np.float32], g: float) -> NDArray[np.float32]:
 def strict_limit(dev: NDArray[np.float32], g: float, eps: int) -> NDArray[np.float32]:
     """ε + 3 g D: the change a pixel must exceed where the background itself moves by D on average."""
     return np.asarray(np.float32(eps) + np.float32(3.0 * g) * dev, np.float32)
+
+
+def seen_changed(mask: BoolA, changed: BoolA, key: BoolA) -> BoolA:
+    """The pixels of an object's mask (h, w) to match its disparity on: those the temporal model (`changed`:
+    |Γ - g B| past its strict limit) or eq. (9) (`key`: the left-key mask) sees change. A pixel neither
+    sees change is the background showing through the outline, which fills the gaps it encloses (between
+    a walker's legs, under its arms): the background there matches at its own disparity and pulls the
+    object's towards it. endless:body frame 1005, a walker at 20 m before a hedge: 61 of its 592 pixels
+    lay off it, and its region matched at 8.85 px; the visible surface's disparity is 9.04 px, the core
+    of its true silhouette matched at 8.93. The whole mask where those pixels are over half of it (what
+    is left would be too little to match)."""
+    own = mask & (changed | key)
+    return own if 2 * int(np.count_nonzero(own)) >= int(np.count_nonzero(mask)) else mask

@@ -21,7 +21,7 @@ from tracker.detect import Box, StereoSubtractor
 from tracker.disparity_sigma import part_disparities
 from tracker.frames import StereoFrame
 from tracker.growth import grow_tracked
-from tracker.masks import NEAR, key_mask, largest_component, temporal_outline
+from tracker.masks import NEAR, key_mask, largest_component, seen_changed, temporal_outline
 from tracker.rectify import Rectifier
 from tracker.regions import background_disparity, hints_around, mask_centroid, nearest_hint, row_thirds
 from tracker.rim import DEFAULT_RIM, RimConfig, RimRecovery
@@ -206,7 +206,7 @@ class Verifier:
         if model is not None and d_hint is not None:  # a tracked object, cameras still
             obj, matched, gain, changed = self._tracked_outline(frame, box, cm, model, m_left, d_hint, free,
                                                                 around, found)
-            d0 = d_hint
+            matched, d0 = seen_changed(matched, changed, m_left), d_hint
         else:
             # a new object, or the cameras move: verification by warping in both directions
             stereo = self._outline_stereo(frame, box, m_left, d_hint)
