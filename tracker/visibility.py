@@ -108,14 +108,14 @@ def cut_and_skew(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, i
 def cuts(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, int], disparity: float,
          bg_disparity: F32 | None, bg_valid: BoolA | None, cfg: VisibilityConfig,
          objects: BoolA | None = None) -> Cuts:
-    """The sides `cut_sides` counts, and how far (px, x and y) the centroid may move across the sides cut by a nearer or
-    level background, which need not hide the target evenly: a board behind a bush's round top loses its
-    lower left corner, and its centroid moves right, along x, though only its bottom side is cut (endless,
-    frames 1195-1244: 2.1 px). The hidden part is taken to go on beyond each ring pixel that hid it, away
-    from the visible centroid, about as far as a cut side's extra 1-σ supposes (kappa times the visible
-    extent that way); the centroid moves by that part's share of the whole area times its centroid's
-    offset. The move's x is returned where a top or bottom side is cut, its y where a left or right one
-    is (the cut sides' own axis has `extra_sigma_px`).
+    """The sides `cut_sides` counts, and how far (px, x and y) the centroid may move across the sides cut by a
+    nearer or level background, which need not hide the target evenly: a board behind a bush's round top loses
+    its lower left corner, and its centroid moves right, along x, though only its bottom side is cut (endless,
+    frames 1195-1244: 2.1 px). The hidden part is taken to go on beyond each ring pixel that hid it, away from
+    the visible centroid, about as far as a cut side's extra 1-σ supposes (kappa times the visible extent that
+    way); the centroid moves by that part's share of the whole area times its centroid's offset. The move's x is
+    returned where a top or bottom side is cut, its y where a left or right one is (the cut sides' own axis has
+    `extra_sigma_px`).
 
     Below the target a nearer or level background counts only where it steps forward from the background
     behind the target's lowest pixels in that column (tracker.bottom_edge.stepped_below); other objects
@@ -294,16 +294,16 @@ def extra_sigma_px(mask: BoolA, cut: tuple[int, int], cfg: VisibilityConfig, occ
     return sx, float(np.hypot(cfg.kappa * bh * np.sqrt(cut[1] - 1), 0.5 * occluder_px))
 
 
-def cut_sigma_px(mask: BoolA, cuts: Cuts, cfg: VisibilityConfig, occluder_px: float | None = None
+def cut_sigma_px(mask: BoolA, seen: Cuts, cfg: VisibilityConfig, occluder_px: float | None = None
                  ) -> tuple[float, float]:
-    """`extra_sigma_px` of the sides `cuts` counts, with the occluder's height (`occluder_below`) bounding
+    """`extra_sigma_px` of the sides `seen` (`cuts`) counts, with the occluder's height (`occluder_below`) bounding
     the bottom's term only where a nearer or level background cuts the bottom: with the top cut and the
     bottom not, what lies below says nothing of how far the target goes on above (occlusion:plate, frames
     59-90: a plate's top cut by the learnt map's band left of a post, which runs on 61 px below it, gave a
     y 1-σ of 31 px, half of that, for kappa times its 29 px height, 12 px)."""
-    if not any(cuts.sides):
+    if not any(seen.sides):
         return 0.0, 0.0
-    return extra_sigma_px(mask, cuts.counts, cfg, occluder_px if cuts.bottom_by_background else None)
+    return extra_sigma_px(mask, seen.counts, cfg, occluder_px if seen.bottom_by_background else None)
 
 
 def occluder_below(mask: BoolA, disparity: float, bg_disparity: F32 | None, bg_valid: BoolA | None,
