@@ -44,6 +44,12 @@ class CorrespondenceMap:
         x0, y0, x1, y1 = box
         return CorrespondenceMap(*(getattr(self, f.name)[y0:y1, x0:x1] for f in fields(CorrespondenceMap)))
 
+    def warp(self, other: U8) -> U8:
+        """The other camera's image `other` (uint8 (H, W)) at the grid pixels' background correspondences,
+        bilinear (eq. 9's Θ; the maps' shape)."""
+        return np.asarray(cv2.remap(other, self.map_x, self.map_y, cv2.INTER_LINEAR,
+                                    borderMode=cv2.BORDER_REPLICATE), np.uint8)
+
     def paste(self, box: tuple[int, int, int, int], part: CorrespondenceMap) -> None:
         """Write `part`'s maps into the pixels of box = (x0, y0, x1, y1)."""
         x0, y0, x1, y1 = box
@@ -260,7 +266,7 @@ class BackgroundDepth:
         cm = self.correspondence(key, frame.gimbal, with_floor=False, box=box)
         img_k, img_o = (frame.left, frame.right) if key == 0 else (frame.right, frame.left)
         x0, y0, x1, y1 = box or (0, 0, img_k.shape[1], img_k.shape[0])
-        ref = cv2.remap(img_o, cm.map_x, cm.map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        ref = cm.warp(img_o)
         resid = np.asarray(cv2.absdiff(np.ascontiguousarray(img_k[y0:y1, x0:x1]), ref), np.uint8)
         resid = np.asarray(cv2.subtract(resid, np.full_like(resid, 3)), np.uint8)
         grid = self._grid(key, 1)

@@ -32,20 +32,12 @@ def grow_tracked(rect: Rectifier, frame: StereoFrame, box: Box, cm: Corresponden
     sy0, sy1 = max(int(ys.min()) - m, 0), min(int(ys.max()) + m + 1, h)
     sx0, sx1 = max(int(xs.min()) - m, 0), min(int(xs.max()) + m + 1, w)
     x0, y0, x1, y1 = part = (box[0] + sx0, box[1] + sy0, box[0] + sx1, box[1] + sy1)
-    at = cm.crop((sx0, sy0, sx1, sy1))
-    at_bg = cv2.remap(frame.right, at.map_x, at.map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    at_bg = cm.crop((sx0, sy0, sx1, sy1)).warp(frame.right)
     out = obj.copy()
     out[sy0:sy1, sx0:sx1] = grown_by_change(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1],
-                                            right_at_d(rect, frame, part, d), np.asarray(at_bg, np.uint8),
+                                            rect.right_image_at(frame.right, part, d), at_bg,
                                             obj[sy0:sy1, sx0:sx1], changed[sy0:sy1, sx0:sx1], eps)
     return out
-
-
-def right_at_d(rect: Rectifier, frame: StereoFrame, box: Box, d: float) -> U8:
-    """The right image sampled at the left box's pixels shifted by disparity d (Θ_d, the box's shape)."""
-    ur, vr = rect.right_at(box, d)
-    return np.asarray(cv2.remap(frame.right, ur.astype(np.float32), vr.astype(np.float32), cv2.INTER_LINEAR,
-                                borderMode=cv2.BORDER_REPLICATE), np.uint8)
 
 
 def local_corr(key: U8, bg: NDArray[np.float32], win: int = 7) -> NDArray[np.float32]:

@@ -94,6 +94,12 @@ class Rectifier:
         rectified disparity d (px): the right rectification map sampled at (x_rect - d, y_rect)."""
         return self._along_row(1, box, -np.float32(d))
 
+    def right_image_at(self, right: U8, box: tuple[int, int, int, int], d: float) -> U8:
+        """The raw right image `right` (uint8 (H, W)) sampled at each pixel of a raw-left box (x0, y0, x1, y1)
+        seen at rectified disparity d (px), bilinear (`right_at`; Θ_d, the box's shape)."""
+        ur, vr = self.right_at(box, d)
+        return np.asarray(cv2.remap(right, ur, vr, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE), np.uint8)
+
     def left_along(self, box: tuple[int, int, int, int], shift: F32) -> tuple[F32, F32]:
         """Raw left position (x, y; float32 (h, w)) of the point `shift` px (float32 (h, w)) along the
         rectified row of each pixel of a raw-left box (x0, y0, x1, y1): the left rectification map sampled at

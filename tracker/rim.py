@@ -357,14 +357,8 @@ class RimRecovery:
         h, w = obj.shape
         sx0, sy0, sx1, sy1 = max(bx - m, 0), max(by - m, 0), min(bx + bw + m, w), min(by + bh + m, h)
         x0, y0, x1, y1 = box[0] + sx0, box[1] + sy0, box[0] + sx1, box[1] + sy1
-        right_obj = [self._right_at(frame, (x0, y0, x1, y1), d * (1.0 + k))
+        right_obj = [self.rect.right_image_at(frame.right, (x0, y0, x1, y1), d * (1.0 + k))
                      for k in ((0.0, -self.cfg.slant, self.cfg.slant) if self.cfg.slant else (0.0,))]
-        right_bg = cv2.remap(frame.right, cm.map_x[sy0:sy1, sx0:sx1], cm.map_y[sy0:sy1, sx0:sx1],
-                             cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-        return (sx0, sy0, sx1, sy1), (x0, y0, x1, y1), right_obj, np.asarray(right_bg, np.uint8)
+        right_bg = cm.crop((sx0, sy0, sx1, sy1)).warp(frame.right)
+        return (sx0, sy0, sx1, sy1), (x0, y0, x1, y1), right_obj, right_bg
 
-    def _right_at(self, frame: StereoFrame, box: Box, d: float) -> U8:
-        """The right image sampled at the pixels of a left box (image pixels) seen at disparity d (px)."""
-        ur, vr = self.rect.right_at(box, d)
-        return np.asarray(cv2.remap(frame.right, ur, vr, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE),
-                          np.uint8)

@@ -109,8 +109,7 @@ def _same_surface(rect: Rectifier, frame: StereoFrame, box: Box, obj: NDArray[np
     shifted by d; its largest component, grown back by two pixels inside the region. What the region
     also holds at another depth (a background uncovered next to the object) drops out."""
     x0, y0, x1, y1 = box
-    ur, vr = rect.right_at(box, d)
-    theta = cv2.remap(frame.right, ur, vr, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    theta = rect.right_image_at(frame.right, box, d)
     diff = cv2.blur(cv2.absdiff(frame.left[y0:y1, x0:x1], theta).astype(np.float32), _WIN)
     same = largest_region(obj & (diff <= 2 * eps))
     return np.asarray(cv2.dilate(same.view(np.uint8), _NB, iterations=2) > 0) & obj
