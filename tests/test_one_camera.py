@@ -3,14 +3,16 @@ camera cannot see, the held disparity's 1-σ, the track it continues, and the tr
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 
 from tracker.bgdepth import CorrespondenceMap
 from tracker.geometry import Camera, StereoRig
-from tracker.one_camera import OneCameraConfig, coast_sigma_px, hidden_from_right, nearest_prediction
+from tracker.one_camera import OneCameraConfig, coast_sigma_px, hidden_from_right, nearest_prediction, seen_by_right
 from tracker.pipeline import Pipeline
 from tracker.rectify import Rectifier
 from tracker.sim.scenarios import SimRig, get_scenario
+from tracker.stereo import refine_region
 from tracker.tracks import MultiTracker
 
 W, H = 640, 480
@@ -203,3 +205,45 @@ def test_a_plate_passing_behind_a_post_keeps_its_track_while_only_the_left_camer
     assert not any(r[2] for r in without)
     # the tracker counts them as such: at most max_frames in a row after a stereo sighting
     assert _longest_run(rows) > 10 and _longest_run(_behind_the_post(OneCameraConfig(max_frames=10))) == 10
+
+
+def _plate_left_of_post() -> tuple[np.ndarray, np.ndarray]:
+    """A rectified pair of the ideal rig: a textured plate at d = 12 px (left columns 60-99) before a
+    background at 5 px, left of a post at 25 px (columns 100-119). Each surface's texture is indexed by
+    its left column; the right camera sees the nearest surface along x_r + d."""
+    rng = np.random.default_rng(5)
+    tex = [np.asarray(cv2.GaussianBlur(rng.uniform(0, 255, (H, W + 40)).astype(np.float32), (0, 0), 1.5))
+           for _ in range(3)]
+    surfaces = [((100, 120), 25.0, tex[2]), ((60, 100), 12.0, tex[1]), ((0, W + 40), 5.0, tex[0])]  # nearest first
+    xs = np.arange(W)
+    left, right = np.empty((H, W), np.float32), np.empty((H, W), np.float32)
+    for img, shift in ((left, 0.0), (right, 1.0)):
+        done = np.zeros(W, bool)
+        for (x0, x1), d, t in surfaces:
+            xl = xs + shift * d  # the left column a right pixel sees at this surface's disparity
+            on = ~done & (xl >= x0) & (xl < x1)
+            img[:, on] = t[:, np.round(xl[on]).astype(int)]
+            done |= on
+    return np.round(left).astype(np.uint8), np.round(right).astype(np.uint8)
+
+
+def test_a_plate_is_matched_on_what_the_right_camera_sees_beside_a_nearer_post() -> None:
+    """The post's right image lies at columns 75-94, so the plate's columns 87-99 are hidden from the right
+    camera: matched with them, the plate scores 0.63 at 11.955 px; on the rest it scores 1 at 12 px."""
+    left, right = _plate_left_of_post()
+    rect = Rectifier(_ideal_rig())
+    box = (60, 200, 100, 260)
+    plate = np.ones((60, 40), bool)
+    ext = (60, 200, 180, 260)
+    seen = seen_by_right(rect, box, plate, 12.0, _background(ext, 5.0, (100, 120, 25.0)), ext, CFG)
+    cols = np.flatnonzero(seen.all(axis=0)) + box[0]
+    assert cols.min() == 60 and cols.max() in (85, 86) and not seen[:, 27:].any()
+    whole = refine_region(left, right, plate, 60, 200, 12.0, min_score=0.0)
+    part = refine_region(left, right, seen, 60, 200, 12.0, min_score=0.0)
+    assert part is not None and abs(part.disparity - 12.0) < 0.02 and part.score > 0.99
+    assert whole is not None and whole.score < 0.7 and abs(whole.disparity - 12.0) > 0.02  # 0.63, 11.955 px
+    # where what the right camera sees is under half the region, the whole region is matched
+    narrow = np.zeros((60, 40), bool)
+    narrow[:, 20:] = True  # columns 80-99: 7 of 20 seen
+    assert np.array_equal(seen_by_right(rect, box, narrow, 12.0, _background(ext, 5.0, (100, 120, 25.0)), ext,
+                                        CFG), narrow)

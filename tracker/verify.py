@@ -21,7 +21,8 @@ from tracker.detect import Box, StereoSubtractor
 from tracker.disparity_sigma import part_disparities
 from tracker.frames import StereoFrame
 from tracker.growth import grow_tracked
-from tracker.masks import NEAR, key_mask, largest_component, seen_changed, temporal_outline
+from tracker.masks import NEAR, found_pixels, key_mask, largest_component, seen_changed, taken_pixels, temporal_outline
+from tracker.one_camera import OneCameraConfig, seen_by_right
 from tracker.rectify import Rectifier
 from tracker.regions import background_disparity, hints_around, mask_centroid, nearest_hint, row_thirds
 from tracker.rim import DEFAULT_RIM, RimConfig, RimRecovery
@@ -59,25 +60,7 @@ _MATCH_HALF = (24, 16)  # half width and height (px) of the largest window match
 _MATCH_HALF_SLANT = (12, 8)  # the same when the larger ones match nowhere (slanted faces, near)
 _PART_TRIES = 2  # regions of a box verified as parts of a body found before (tracker.split.same_body)
 _SEARCH_RADIUS = 4  # px about a disparity that refining from failed to match (Verifier.search_radius)
-_TAKEN = np.ones((5, 5), np.uint8)
-
-
-def _grown(m8: U8) -> BoolA:
-    """A uint8 mask's pixels grown by two (the 5x5 square): what a found object claims about it."""
-    return np.asarray(cv2.dilate(m8, _TAKEN) > 0)
-
-
-def _taken(blob: Blob, changed: BoolA | None) -> BoolA:
-    """The pixels of a box that a found object explains: the object and its occlusion shadow (the object
-    shifted left by d - d_background, approximately, in raw pixels), grown by two pixels. With the
-    temporal model (`changed`: pixels unlike the background), shadow pixels that changed are left: they
-    are another object seen there, not the shadow of this one."""
-    m8 = blob.mask.astype(np.uint8)
-    shift = np.array([[1.0, 0.0, -(blob.disparity - blob.bg_disparity)], [0.0, 1.0, 0.0]], np.float32)
-    shadow = np.asarray(cv2.warpAffine(m8, shift, (m8.shape[1], m8.shape[0]), flags=cv2.INTER_NEAREST), np.uint8)
-    if changed is not None:
-        shadow[changed] = 0
-    return _grown(m8 | shadow)
+_ONE = OneCameraConfig()  # its depth_tol_px and cover_px: what a nearer background hides from the right camera
 
 
 def _part_of(found: list[Blob], region: BoolA, area: int, min_part_px: int) -> Blob | None:
@@ -99,20 +82,6 @@ def _at_left_border(region: BoolA, box: Box, d: float) -> bool:
     far plates split by the hedge lost their lower part (endless:plate, elevation errors of 1 deg)."""
     cols = np.flatnonzero(region.any(axis=0))
     return bool(cols.size) and box[0] + int(cols[0]) < d + 8.0
-
-
-def _found_pixels(found: list[Blob]) -> BoolA | None:
-    """The pixels (grown by two) of the objects found before in a box, or None: not the background of a
-    region verified after them, so left out of its temporal outline's gain. Parts of the same body too:
-    a region beside a bright torso whose ring took the torso in got g 1.28 where the light had not
-    changed, and most of the region looked changed (a ghost of 5,400 px joined to a walker at 3 m,
-    walk:body frame 24)."""
-    if not found:
-        return None
-    m8 = np.zeros(found[0].mask.shape, np.uint8)
-    for b in found:
-        m8 |= b.mask.view(np.uint8)
-    return _grown(m8)
 
 
 class Verifier:
@@ -179,7 +148,7 @@ class Verifier:
             found.append(blob)
             # a second object in the same box must be substantial: not the rim left around the first
             min_area = max(min_area, 4 * cfg.min_area_px, blob.area // 10)
-            taken = _taken(blob, changed)
+            taken = taken_pixels(blob.mask, blob.disparity - blob.bg_disparity, changed)
             m_raw, free = m_raw & ~taken, free & ~taken
         return found
 
@@ -206,7 +175,7 @@ class Verifier:
         if model is not None and d_hint is not None:  # a tracked object, cameras still
             obj, matched, gain, changed = self._tracked_outline(frame, box, cm, model, m_left, d_hint, free,
                                                                 around, found)
-            matched, d0 = seen_changed(matched, changed, m_left), d_hint
+            matched, d0 = self._seen_by_right(frame, box, seen_changed(matched, changed, m_left), d_hint), d_hint
         else:
             # a new object, or the cameras move: verification by warping in both directions
             stereo = self._outline_stereo(frame, box, m_left, d_hint)
@@ -264,6 +233,11 @@ class Verifier:
             wide = own_pixels(self.rect, frame, box, wide, d_hint, around, self.cfg.min_area_px)
         return wide, matched, gain, changed
 
+    def _seen_by_right(self, frame: StereoFrame, box: Box, region: BoolA, d: float) -> BoolA:
+        """one_camera.seen_by_right: the region less what a nearer background hides from the right camera."""
+        ext = (box[0], box[1], min(box[2] + self.sub.bg.num_disparities, frame.left.shape[1]), box[3])
+        return seen_by_right(self.rect, box, region, d, self.sub.correspondence(0, frame.gimbal, ext), ext, _ONE)
+
     def _temporal_outline(self, frame: StereoFrame, box: Box, model: tuple[F32, F32], core: BoolA | None,
                           region: BoolA, found: list[Blob] | None) -> tuple[BoolA, float, BoolA]:
         """masks.temporal_outline of an object inside `region` of the box (core: none, or the pixels both
@@ -272,7 +246,7 @@ class Verifier:
         bg, dev = model
         return temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1], dev[y0:y1, x0:x1],
                                 np.zeros_like(region) if core is None else core, region, self.cfg.epsilon,
-                                _found_pixels(found or []))
+                                found_pixels([f.mask for f in found or []]))
 
     def search_radius(self, d_hint: float | None) -> int:
         """How far (px) about a track's predicted disparity d the search goes when refining from it fails:
