@@ -217,3 +217,32 @@ def test_an_upright_bodys_centre_lies_above_its_silhouettes_centroid_unless_the_
         a = Localizer(rect, solid=moved).locate(*base, extent, None, in_frame)
         b = Localizer(rect, solid=still).locate(*base, extent, None, in_frame)
         assert np.allclose(a.rig, b.rig, rtol=0.0, atol=1e-12), extent
+
+
+def test_a_person_whose_lower_part_is_hidden_is_placed_from_its_top() -> None:
+    # an upright body with its top seen and its bottom hidden: its centre c H f / Z_c below the top (Z_c the
+    # centre's depth, ρ/2 of the seen width behind the face); y's 1-σ the top's edge and the height's share,
+    # not what is hidden (extra_px); a ball (not upright) keeps its own
+    rect = Rectifier(default_rig())
+    d = rect.f * rect.rig.baseline / 10.0  # the face at 10 m
+    args = (np.array([360.0, 220.0]), d, 0.05, 4000, None)
+    prior = SolidPrior(rim_sigma_px=0.0, height_sigma_m=0.0, centre_below_top_sigma=0.0)
+    loc = Localizer(rect, solid=prior)
+    person = loc.locate(*args, (0.0, 30.0), (60.0, 100.0), None, True, 150.0)
+    z_c = 10.0 * (1.0 + 0.5 * prior.upright_ratio * 60.0 / rect.f)
+    y_expected = 150.0 + prior.centre_below_top * prior.height_m * rect.f / z_c
+    _, y, _ = rect.rig_to_rect(person.rig[None, :])
+    assert math.isclose(float(y[0]), y_expected, abs_tol=1e-6)
+    assert abs(y_expected - 220.0) > 5.0  # not the silhouette's centroid
+    # what is hidden does not count: the same with no extra term, and a tight y
+    same = loc.locate(*args, (0.0, 0.0), (60.0, 100.0), None, True, 150.0)
+    assert np.allclose(person.cov_world, same.cov_world, rtol=1e-12, atol=0.0)
+    assert person.sigma_phi < 0.2 * loc.locate(*args, (0.0, 30.0), (60.0, 100.0)).sigma_phi
+    # the height's spread: c σ_H f / Z_c px along y
+    spread = Localizer(rect, solid=SolidPrior(rim_sigma_px=0.0, centre_below_top_sigma=0.0))
+    wide = spread.locate(*args, (0.0, 0.0), (60.0, 100.0), None, True, 150.0)
+    s_px = prior.centre_below_top * 0.10 * rect.f / z_c
+    assert math.isclose(wide.sigma_phi, s_px / rect.f, rel_tol=0.05)
+    # a ball's top says nothing of its centre that way
+    ball = loc.locate(*args, (0.0, 0.0), (60.0, 60.0), None, True, 150.0)
+    assert math.isclose(float(rect.rig_to_rect(ball.rig[None, :])[1][0]), 220.0, abs_tol=1e-6)

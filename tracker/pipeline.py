@@ -224,13 +224,21 @@ class Pipeline:
         cx = with_gap_x(terms.centroid_px[0], terms.gap_x_px, self.localizer.solid, w, h)
         cy = terms.centroid_px[1]
         in_frame = b.box[1] > 0 and b.box[3] < self.rig.left.size[1]  # its box reaches neither top nor bottom
+        top = self._top_px(b) if terms.hidden_below and in_frame else None  # a body seen over what hides it
         return self.localizer.locate(b.centroid_rect, b.disparity, max(b.disparity_sigma, terms.disparity_px),
                                      b.area, frame.gimbal, (cx, float(np.hypot(cy, jump))), (float(w), float(h)),
-                                     terms.rim_px, in_frame)
+                                     terms.rim_px, in_frame, top)
+
+    def _top_px(self, b: Blob) -> float:
+        """The rectified y (px) of a blob's outline's top: the upper edge of its highest row's pixels."""
+        rows = np.flatnonzero(b.mask.any(axis=1))
+        cols = np.flatnonzero(b.mask[rows[0]])
+        x, y = int(b.box[0] + cols[cols.size // 2]), int(b.box[1] + rows[0])
+        return float(self.rect.rect_of_raw[0][y, x, 1]) - 0.5
 
     def _sigma_terms(self, frame: StereoFrame, b: Blob, blobs: list[Blob]) -> SigmaTerms:
-        extra, gap_x = self._centroid_extra(frame, b, blobs)
-        return SigmaTerms(self._disparity_sigma(frame, b), extra, gap_x, self._rim_px(frame, b))
+        extra, gap_x, hidden_below = self._centroid_extra(frame, b, blobs)
+        return SigmaTerms(self._disparity_sigma(frame, b), extra, gap_x, self._rim_px(frame, b), hidden_below)
 
     def _rim_px(self, frame: StereoFrame, b: Blob) -> tuple[float, float] | None:
         """A solid body's outline's 1-σ (px, x and y) from its rim's contrast against the temporal model
@@ -287,28 +295,30 @@ class Pipeline:
         return parts_sigma(self.verifier.part_disparities(frame, b), b.disparity_sigma)
 
     def _centroid_extra(self, frame: StereoFrame, b: Blob, blobs: list[Blob]
-                        ) -> tuple[tuple[float, float], float]:
+                        ) -> tuple[tuple[float, float], float, bool]:
         """The centroid's further 1-σ (px, x and y): where the target is seen in part, where its outline
         is drawn by warping (no temporal model at this pose: the cameras move; tracker.outline), the
         outline's whole pixels and the parts of a body its segmentation may have missed in the notches of
         its outline (tracker.segmentation); in quadrature, all being independent. The hull gap's x term
-        is returned apart (SigmaTerms.gap_x_px; `with_gap_x`)."""
+        is returned apart (SigmaTerms.gap_x_px; `with_gap_x`), and whether a nearer background hides the
+        blob's bottom while its top is seen (SigmaTerms.hidden_below)."""
         others = [e for o in blobs if o is not b for e in object_and_shadow(o.box, o.mask, o.disparity, o.bg_disparity)]
-        px, py = self._partly_seen(frame, b, others)
+        px, py, hidden_below = self._partly_seen(frame, b, others)
         edge, (gap_x, gap_y) = outline_sigma_px(b.mask)
         terms = [edge, (0.0, gap_y)]
         if self.subtractor.left_background(frame.gimbal) is None:
             terms.append(warped_outline_sigma_px(b.mask, self.outline))
         for ox, oy in terms:
             px, py = float(np.hypot(px, ox)), float(np.hypot(py, oy))
-        return (px, py), gap_x
+        return (px, py), gap_x, hidden_below
 
     def _partly_seen(self, frame: StereoFrame, b: Blob, others: list[tuple[Box, BoolA, float]]
-                     ) -> tuple[float, float]:
+                     ) -> tuple[float, float, bool]:
         """The centroid's extra 1-σ (px, x and y) where the blob is cut by the image border, by another
         object found this frame (others: box, mask, disparity) or, while the cameras are still (its
         correspondence map is kept), by a nearer background; and, in quadrature, the offset of the rows down
-        to the ground where the blob's lowest part may be lost against it (tracker.visibility)."""
+        to the ground where the blob's lowest part may be lost against it (tracker.visibility); and whether
+        a nearer background cuts its bottom and nothing its top."""
         mask, box = padded(b.mask, b.box, self.rig.left.size, left=2 + int(np.ceil(max(b.disparity, 0.0))),
                            below=2 + b.box[3] - b.box[1])
         cm = None if self.subtractor.moving else self.subtractor.correspondence(0, frame.gimbal, box)
@@ -322,7 +332,8 @@ class Pipeline:
         tall = occluder_below(mask, b.disparity, disp, valid, self.visibility) if seen.bottom_by_background else None
         px, py = cut_sigma_px(b.mask, seen, self.visibility, tall)
         ux, uy = unseen_below(mask, b.disparity, disp, valid, self.visibility)
-        return float(np.sqrt(px * px + sx * sx + ux * ux)), float(np.sqrt(py * py + sy * sy + uy * uy))
+        hidden_below = seen.bottom_by_background and not seen.sides[2]
+        return float(np.sqrt(px * px + sx * sx + ux * ux)), float(np.sqrt(py * py + sy * sy + uy * uy)), hidden_below
 
     def _foreground_low(self, blobs: list[Blob]) -> NDArray[np.uint8] | None:
         if not blobs:

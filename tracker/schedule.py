@@ -200,12 +200,15 @@ class SigmaTerms:
     gap_x_px, apart, for it counts only where the target is not an upright body at the frame the terms are
     used for (tracker.localize.SolidPrior.upright; the terms may be a few frames old); rim_px, a solid
     body's outline's 1-σ (px, x and y) from its rim's contrast (tracker.rim_contrast; None: not known, the
-    cameras moving, or no SolidPrior)."""
+    cameras moving, or no SolidPrior); hidden_below, a nearer background hides the target's bottom while
+    its top is seen (tracker.visibility.Cuts; an upright body's centre is then found from its top,
+    tracker.localize.Localizer.locate)."""
 
     disparity_px: float
     centroid_px: tuple[float, float]
     gap_x_px: float = 0.0
     rim_px: tuple[float, float] | None = None
+    hidden_below: bool = False
 
 
 class SigmaSchedule:
