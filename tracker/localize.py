@@ -222,9 +222,10 @@ class Localizer:
             person = self.solid.upright(w, h)
             upright = self.solid.upright_sigma * h if person else 0.0
             S[0, 0] += (self.solid.upright_x_sigma * h) ** 2 if person else rx**2  # x: limbs or rim
-            S[1, 1] += ry**2 + max(upright**2 - extra_px[1] ** 2, 0.0)  # y: max(extra, upright)
             if from_top is not None:  # y: the top's own edge and the height's share, not what is hidden
                 S[1, 1] = s_c**2 + s_cy**2 + self.solid.rim_sigma_px**2 + from_top[1] ** 2
+            else:
+                S[1, 1] += ry**2 + max(upright**2 - extra_px[1] ** 2, 0.0)  # y: max(extra, upright)
         cov_rig = J @ S @ J.T + cal.scale_rel**2 * np.outer(X_rig, X_rig)  # f·b off by ε: X -> (1 + ε) X
         if self.solid is not None and extent_px is not None:
             prior = self.solid.depth_ratio(*extent_px)

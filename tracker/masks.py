@@ -97,8 +97,13 @@ def seen_changed(mask: BoolA, changed: BoolA, key: BoolA) -> BoolA:
     lay off it, and its region matched at 8.85 px; the visible surface's disparity is 9.04 px, the core
     of its true silhouette matched at 8.93. The whole mask where those pixels are over half of it (what
     is left would be too little to match)."""
-    own = mask & (changed | key)
-    return own if 2 * int(np.count_nonzero(own)) >= int(np.count_nonzero(mask)) else mask
+    return half_or_whole(mask & (changed | key), mask)
+
+
+def half_or_whole(part: BoolA, whole: BoolA) -> BoolA:
+    """`part` of a region to match on where it is at least half of `whole`, else `whole` (what is left would
+    be too little to match on)."""
+    return part if 2 * int(np.count_nonzero(part)) >= int(np.count_nonzero(whole)) else whole
 
 
 _CLAIM = np.ones((5, 5), np.uint8)

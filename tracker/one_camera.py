@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tracker.bgdepth import CorrespondenceMap
+from tracker.masks import half_or_whole
 from tracker.rectify import Rectifier
 
 F64 = NDArray[np.float64]
@@ -87,8 +88,7 @@ def seen_by_right(rect: Rectifier, box: Box, region: BoolA, d: float, cm: Corres
     that is under half of it (too little to match on). A plate at 12 m passing behind a post at 9 m
     (occlusion:plate) was matched with the columns the post hides from the right camera, and its disparity
     crept from 14.9 to 16 px in three frames: the post's image pulled it."""
-    keep = region & ~hidden_from_right(rect, box, region, d, cm, ext, config)
-    return keep if 2 * int(np.count_nonzero(keep)) >= int(np.count_nonzero(region)) else region
+    return half_or_whole(region & ~hidden_from_right(rect, box, region, d, cm, ext, config), region)
 
 
 def coast_sigma_px(d: float, matched_sigma: float, age_s: float, fb: float, config: OneCameraConfig) -> float:
