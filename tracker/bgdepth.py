@@ -159,6 +159,9 @@ class BackgroundDepth:
         self.pad = (int(self.f * np.tan(np.radians(pan_range_deg))),
                     int(self.f * np.tan(np.radians(tilt_range_deg))))
         self.canvas = np.zeros((h + 2 * self.pad[1], w + 2 * self.pad[0]), np.float32)
+        # what was learnt (0 = unknown), apart from the canvas's filled holes: a later pose's points, sparse
+        # where its rays meet the canvas obliquely, must not keep the holes filled before between them
+        self.learnt = np.zeros(self.canvas.shape, np.float32)
         self.cx, self.cy = w / 2.0 + self.pad[0], h / 2.0 + self.pad[1]
         self.rays = tuple(self._rays(cam) for cam in (rect.rig.left, rect.rig.right))
         # per key camera: residual of eq. (9) on the surveyed empty scene, per world direction
@@ -185,7 +188,7 @@ class BackgroundDepth:
             check_disparity_sign(match_support(lr, rr, self.num_disparities), swapped, lr.size // 400)
             self._sign_checked = True
         pu, pv, inv = self._match_points(frame, max_disparity or self.num_disparities)
-        self.canvas[pv, pu] = inv
+        self.learnt[pv, pu] = inv
         self._fill_holes()
         for key in (0, 1):
             self._learn_floor(frame, key)
@@ -208,8 +211,9 @@ class BackgroundDepth:
         u1, v1 = min(int(np.ceil(cu.max())) + 1, W), min(int(np.ceil(cv.max())) + 1, H)
         pu, pv, inv = self._match_points(frame, self.num_disparities, rows, cols)
         inside = (pu >= u0) & (pu < u1) & (pv >= v0) & (pv < v1)
-        self.canvas[v0:v1, u0:u1] = 0.0
-        self.canvas[pv[inside], pu[inside]] = inv[inside]
+        self.learnt[v0:v1, u0:u1] = 0.0
+        self.learnt[pv[inside], pu[inside]] = inv[inside]
+        self.canvas[v0:v1, u0:u1] = self.learnt[v0:v1, u0:u1]
         m = 8  # fill the holes from the known directions around the box
         crop = (max(u0 - m, 0), max(v0 - m, 0), min(u1 + m, W), min(v1 + m, H))
         self.canvas[crop[1]:crop[3], crop[0]:crop[2]] = _filled(self.canvas[crop[1]:crop[3], crop[0]:crop[2]])
@@ -290,7 +294,7 @@ class BackgroundDepth:
     def _fill_holes(self) -> None:
         """Fill unknown pixels inside the learnt area with their farthest known neighbour (occlusion
         holes belong to the background behind), by repeated grey-level erosion of 1/ρ."""
-        self.canvas = _filled(self.canvas)
+        self.canvas = _filled(self.learnt)
 
     # -- lookup -----------------------------------------------------------------------------------
     def _grid(self, key: int, step: int) -> _RayGrid:
