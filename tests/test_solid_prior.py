@@ -246,3 +246,17 @@ def test_a_person_whose_lower_part_is_hidden_is_placed_from_its_top() -> None:
     # a ball's top says nothing of its centre that way
     ball = loc.locate(*args, (0.0, 0.0), (60.0, 60.0), None, True, 150.0)
     assert math.isclose(float(rect.rig_to_rect(ball.rig[None, :])[1][0]), 220.0, abs_tol=1e-6)
+
+
+def test_a_round_body_is_placed_at_the_centre_of_a_sphere_behind_its_seen_face() -> None:
+    # the matched disparity is the seen face's mean depth: over the disc a sphere of radius R is seen as,
+    # the mean of its near surface's depth lies 2R/3 before the centre; the default ρ puts it there
+    R = 1.0
+    r = np.linspace(0.0, R, 200001)
+    w = 2.0 * np.pi * r  # the disc's area element
+    face_before_centre = float(np.trapezoid(np.sqrt(R * R - r * r) * w, r) / np.trapezoid(w, r))
+    prior = SolidPrior()
+    ratio, sigma = prior.depth_ratio(60.0, 60.0)  # seen as wide as high: neither upright nor wide
+    assert math.isclose(0.5 * ratio * 2.0 * R, face_before_centre, rel_tol=1e-3)
+    # a cylinder seen side-on (πR/4 before its axis) lies within the 1-σ
+    assert abs(np.pi / 4.0 - ratio) <= sigma
