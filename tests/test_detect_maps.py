@@ -86,3 +86,31 @@ def test_an_objects_margin_worked_out_a_stripe_at_a_time_is_the_whole_one() -> N
             got = np.zeros((20, 640), bool) if part is None else paint_masks([part], a, (20, 640))
             assert np.array_equal(got, want[a:b])
     assert object_margin((0, 0, 10, 10), np.zeros((10, 10), bool), size, (0, 480)) is None
+
+
+def test_an_object_no_outline_covers_is_not_learnt_in_one_pass() -> None:
+    """Where the frame is unlike B past the strict limit (ε + 3 g D), B and D adapt at a tenth of the rate: a
+    target missed for a frame (two-targets:plate, frames 140-156: a disc coming out from behind the crosser,
+    taken into its outline) was learnt in one pass, D rising by α |Γ/g - B| and the limit with it, and its
+    top 8 rows were lost for the next 30 frames. A pixel within the limit (light, noise) adapts at α."""
+    sim = SimRig(get_scenario("walk"), seed=0)
+    pipe = Pipeline(sim.rig)
+    pipe.learn_background(sim.background())
+    sub = pipe.subtractor
+    frame = sim.step().frame
+    bg0, dev0 = (a.copy() for a in sub.left_background(frame.gimbal))  # type: ignore[union-attr]
+    left = np.clip(bg0 + 2.0, 0, 255).astype(np.uint8)  # everywhere a little brighter: within the limit
+    left[200:260, 300:340] = np.where(bg0[200:260, 300:340] > 128, 10, 245)  # an object, far from B
+    pair = StereoFrame(frame.index, left, frame.right, frame.t_left, frame.t_right, frame.gimbal)
+    for _ in range(24):  # one stripe a frame: every row once, no object outlined
+        sub.update_left_background(pair, [], 1.0)
+    bg1, dev1 = sub.left_background(frame.gimbal)  # type: ignore[misc]
+    obj = (slice(200, 260), slice(300, 340))
+    moved = np.abs(bg1[obj] - bg0[obj]) / np.abs(left[obj].astype(np.float32) - bg0[obj])
+    assert np.allclose(moved, 0.03, atol=1e-3)  # a tenth of α = 0.3
+    limit = sub.cfg.epsilon + 3.0 * dev1[obj]
+    assert (np.abs(left[obj].astype(np.float32) - bg1[obj]) > limit).all()  # still unlike B: still seen
+    rest = (slice(0, 150), slice(0, 640))
+    near = np.abs(left[rest].astype(np.float32) - bg0[rest]) <= sub.cfg.epsilon + 3.0 * dev0[rest]
+    step = (bg1[rest] - bg0[rest])[near] / (left[rest].astype(np.float32) - bg0[rest])[near]
+    assert np.allclose(step[np.isfinite(step)], 0.3, atol=1e-3)

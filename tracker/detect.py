@@ -266,7 +266,9 @@ class StereoSubtractor:
         """Adapt the temporal background B ← B + α (Γ/g - B) on one horizontal stripe per frame (each
         row every `stripes` frames), away from objects and a margin about them (object_margin: an outline
         that missed a rim or a limb must not teach the model the object, which would then show as a ghost
-        where it was); g is the global gain of this frame."""
+        where it was); g is the global gain of this frame. Where Γ/g is unlike B past the strict limit
+        (ε/g + 3 D) the rate is α/10: an object no outline covered this frame (missed, or taken into
+        another's) is not learnt in one pass, while what stays there long (a parked car) still is."""
         model = self.left_background(frame.gimbal)
         if model is None:
             return
@@ -279,8 +281,12 @@ class StereoSubtractor:
         cur = frame.left[y0:y1].astype(np.float32) * np.float32(1.0 / max(gain, 1e-3))
         grown = [g for b, m in objects if (g := object_margin(b, m, (bg.shape[1], h), (y0, y1))) is not None]
         keep = paint_masks(grown, y0, (y1 - y0, bg.shape[1])) if grown else None
-        a = np.float32(alpha)
-        new_dev = dev[y0:y1] + a * (np.abs(cur - bg[y0:y1]) - dev[y0:y1])  # D ← D + α(|Γ/g - B| - D)
+        resid = np.abs(cur - bg[y0:y1])
+        # a pixel unlike the background (past ε + 3 g D, the strict limit) adapts slowly: an object missed
+        # this frame would otherwise be learnt in one pass (D jumps by α |Γ/g - B|, the limit with it)
+        a = np.where(resid > np.float32(self.cfg.epsilon / max(gain, 1e-3)) + 3.0 * dev[y0:y1],
+                     np.float32(alpha * 0.1), np.float32(alpha)).astype(np.float32)
+        new_dev = dev[y0:y1] + a * (resid - dev[y0:y1])  # D ← D + α(|Γ/g - B| - D)
         new_bg = bg[y0:y1] + a * (cur - bg[y0:y1])  # B ← B + α(Γ/g - B)
         dev[y0:y1] = new_dev if keep is None else np.where(keep, dev[y0:y1], new_dev)
         bg[y0:y1] = new_bg if keep is None else np.where(keep, bg[y0:y1], new_bg)
