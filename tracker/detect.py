@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 
 from tracker.bgdepth import BackgroundDepth, CorrespondenceMap
 from tracker.frames import GimbalState, StereoFrame, check_pair
+from tracker.masks import change, strict_limit
 
 U8 = NDArray[np.uint8]
 Box = tuple[int, int, int, int]
@@ -281,12 +282,11 @@ class StereoSubtractor:
         cur = frame.left[y0:y1].astype(np.float32) * np.float32(1.0 / max(gain, 1e-3))
         grown = [g for b, m in objects if (g := object_margin(b, m, (bg.shape[1], h), (y0, y1))) is not None]
         keep = paint_masks(grown, y0, (y1 - y0, bg.shape[1])) if grown else None
-        resid = np.abs(cur - bg[y0:y1])
-        # a pixel unlike the background (past ε + 3 g D, the strict limit) adapts slowly: an object missed
-        # this frame would otherwise be learnt in one pass (D jumps by α |Γ/g - B|, the limit with it)
-        a = np.where(resid > np.float32(self.cfg.epsilon / max(gain, 1e-3)) + 3.0 * dev[y0:y1],
-                     np.float32(alpha * 0.1), np.float32(alpha)).astype(np.float32)
-        new_dev = dev[y0:y1] + a * (resid - dev[y0:y1])  # D ← D + α(|Γ/g - B| - D)
+        # a pixel unlike the background (|Γ - g B| past the strict limit ε + 3 g D) adapts slowly: an object
+        # missed this frame would otherwise be learnt in one pass (D jumps by α |Γ/g - B|, the limit with it)
+        unlike = change(frame.left[y0:y1], bg[y0:y1], gain) > strict_limit(dev[y0:y1], gain, self.cfg.epsilon)
+        a = np.where(unlike, np.float32(alpha * 0.1), np.float32(alpha))
+        new_dev = dev[y0:y1] + a * (np.abs(cur - bg[y0:y1]) - dev[y0:y1])  # D ← D + α(|Γ/g - B| - D)
         new_bg = bg[y0:y1] + a * (cur - bg[y0:y1])  # B ← B + α(Γ/g - B)
         dev[y0:y1] = new_dev if keep is None else np.where(keep, dev[y0:y1], new_dev)
         bg[y0:y1] = new_bg if keep is None else np.where(keep, bg[y0:y1], new_bg)
