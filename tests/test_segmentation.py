@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tracker.segmentation import HeightHistory, edge_quantisation_px, hull_gap_px, outline_sigma_px
+from tracker.segmentation import ExtentHistory, HeightHistory, edge_quantisation_px, hull_gap_px, outline_sigma_px
 
 
 def _centroid(m: np.ndarray) -> np.ndarray:
@@ -126,3 +126,45 @@ def test_an_upright_bodys_hull_gap_counts_along_y_only() -> None:
     assert with_gap_x(0.3, gx, SolidPrior(), 32.0, 110.0) == 0.3
     assert with_gap_x(0.3, gx, None, 32.0, 110.0) == pytest.approx(float(np.hypot(0.3, gx)))
     assert with_gap_x(0.3, gx, SolidPrior(), 110.0, 32.0) == pytest.approx(float(np.hypot(0.3, gx)))
+
+
+def test_extent_history_bounds_a_cut_by_what_the_track_showed_whole() -> None:
+    hist = ExtentHistory()
+    kappa = (12.4, 12.4)  # kappa x the visible extent (tracker.visibility.extra_sigma_px): nothing known
+    assert hist.cut_sigma_px(1, (30.0, 30.0), 900.0, 15.0, kappa) == kappa  # no history yet
+    for d in (15.5, 15.4, 15.3, 15.2):  # a square 30 px across at 15 px of disparity, seen whole, receding
+        s = d / 15.0
+        assert hist.cut_sigma_px(1, (30.0 * s, 30.0 * s), 900.0 * s * s, d, (0.0, 0.0)) == (0.0, 0.0)
+    # beside a nearer object, seen whole still at 15 px: only the extents' rounding (1/√6 px rms), halved
+    sx, sy = hist.cut_sigma_px(1, (30.0, 30.0), 900.0, 15.0, kappa)
+    assert sx == pytest.approx(0.5 / np.sqrt(6.0)) and sy == pytest.approx(0.5 / np.sqrt(6.0))
+    # a strip 10 px wide hidden at one side: the centroid is 5 px off along x; y keeps kappa's 0, not cut
+    sx, sy = hist.cut_sigma_px(1, (20.0, 30.0), 600.0, 15.0, (8.0, 0.0))
+    assert sx == pytest.approx(0.5 * np.sqrt(100.0 + 1.0 / 6.0)) and sy == 0.0
+    # a rail 6 px high across it: the extents whole, 180 px² hidden inside the outline, up to its share of
+    # the seen area times half the extent (3.75 px) along either axis
+    sx, sy = hist.cut_sigma_px(1, (30.0, 30.0), 720.0, 15.0, kappa)
+    assert sy == pytest.approx(np.sqrt(1.0 / 24.0 + (15.0 * 180.0 / 720.0) ** 2)) and sx == pytest.approx(sy)
+    # never more than kappa's term; cut frames add nothing to the history; another track has its own
+    assert hist.cut_sigma_px(1, (2.0, 30.0), 60.0, 15.0, (0.8, 0.0))[0] == 0.8
+    assert hist.cut_sigma_px(2, (20.0, 30.0), 600.0, 15.0, (8.0, 0.0)) == (8.0, 0.0)
+    hist.keep_only([2])
+    assert hist.cut_sigma_px(1, (20.0, 30.0), 600.0, 15.0, (8.0, 0.0)) == (8.0, 0.0)
+
+
+def test_extent_history_widens_by_how_much_the_whole_target_varied() -> None:
+    hist = ExtentHistory()
+    for w in (40.0, 50.0, 40.0, 50.0):  # a walker's width with its stride, at disparity 10 px
+        hist.cut_sigma_px(1, (w, 100.0), 3000.0, 10.0, (0.0, 0.0))
+    sx, _ = hist.cut_sigma_px(1, (45.0, 100.0), 3000.0, 10.0, (18.0, 0.0))
+    assert sx == pytest.approx(0.5 * np.sqrt(0.0 + 25.0 + 1.0 / 6.0))  # median 45, standard deviation 5
+
+
+def test_extent_history_keeps_no_frame_whose_area_fell_short() -> None:
+    hist = ExtentHistory()
+    for _ in range(5):
+        hist.cut_sigma_px(1, (30.0, 30.0), 900.0, 15.0, (0.0, 0.0))
+    for _ in range(20):  # a third of it behind a rail no side cut was found at: not taken as its size
+        hist.cut_sigma_px(1, (30.0, 30.0), 600.0, 15.0, (0.0, 0.0))
+    _, sy = hist.cut_sigma_px(1, (30.0, 30.0), 600.0, 15.0, (12.0, 12.0))
+    assert sy == pytest.approx(np.sqrt(1.0 / 24.0 + (15.0 * 300.0 / 600.0) ** 2))

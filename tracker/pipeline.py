@@ -30,7 +30,7 @@ from tracker.rectify import Rectifier
 from tracker.regions import hints_inside
 from tracker.rim_contrast import RimContrastConfig, faint_shares, rim_sigma_px
 from tracker.schedule import SigmaSchedule, SigmaTerms, VerifySchedule
-from tracker.segmentation import HeightHistory, outline_sigma_px
+from tracker.segmentation import ExtentHistory, HeightHistory, outline_sigma_px
 from tracker.split import join_occluded, join_parts
 from tracker.temporal import TemporalConfig, TemporalDetector, without_duplicates
 from tracker.tracks import MultiTracker, TrackerConfig
@@ -112,6 +112,7 @@ class Pipeline:
         self.schedule = VerifySchedule(verify_budget_ms, later=between_frames)
         self.sigma_schedule = SigmaSchedule(sigma_budget_ms)
         self.heights = HeightHistory()
+        self.extents = ExtentHistory()
         self.visibility = VisibilityConfig()
         self.outline = OutlineConfig()
         self.rim_contrast = RimContrastConfig()
@@ -181,6 +182,7 @@ class Pipeline:
         ids = self.tracker.update(frame.t, self.ego.to_home(obs, frame.gimbal), sigma_d, alone)
         self.sigma_schedule.keep_only([tr.track_id for tr in self.tracker.tracks])
         self.heights.keep_only([tr.track_id for tr in self.tracker.tracks])
+        self.extents.keep_only([tr.track_id for tr in self.tracker.tracks])
         t_ids = time.perf_counter()
         locs = [self._locate(frame, b, blobs, i, t0) for b, i in zip(blobs, ids, strict=True)]
         self._done = (frame, blobs, ids, hints, seek)  # for `between_frames`
@@ -221,8 +223,9 @@ class Pipeline:
         terms = self.sigma_schedule.terms(track_id, frame.index, start, lambda: self._sigma_terms(frame, b, blobs))
         _, _, w, h = cv2.boundingRect(b.mask.view(np.uint8))
         jump = self.heights.sigma_px(track_id, frame.index, float(h), b.disparity)
-        cx = with_gap_x(terms.centroid_px[0], terms.gap_x_px, self.localizer.solid, w, h)
-        cy = terms.centroid_px[1]
+        kx, ky = self.extents.cut_sigma_px(track_id, (float(w), float(h)), float(b.area), b.disparity, terms.cut_px)
+        cx = with_gap_x(float(np.hypot(terms.centroid_px[0], kx)), terms.gap_x_px, self.localizer.solid, w, h)
+        cy = float(np.hypot(terms.centroid_px[1], ky))
         in_frame = b.box[1] > 0 and b.box[3] < self.rig.left.size[1]  # its box reaches neither top nor bottom
         top = self._top_px(b) if terms.hidden_below and in_frame else None  # a body seen over what hides it
         return self.localizer.locate(b.centroid_rect, b.disparity, max(b.disparity_sigma, terms.disparity_px),
@@ -237,8 +240,8 @@ class Pipeline:
         return float(self.rect.rect_of_raw[0][y, x, 1]) - 0.5
 
     def _sigma_terms(self, frame: StereoFrame, b: Blob, blobs: list[Blob]) -> SigmaTerms:
-        extra, gap_x, hidden_below = self._centroid_extra(frame, b, blobs)
-        return SigmaTerms(self._disparity_sigma(frame, b), extra, gap_x, self._rim_px(frame, b), hidden_below)
+        extra, gap_x, hidden_below, cut = self._centroid_extra(frame, b, blobs)
+        return SigmaTerms(self._disparity_sigma(frame, b), extra, gap_x, self._rim_px(frame, b), hidden_below, cut)
 
     def _rim_px(self, frame: StereoFrame, b: Blob) -> tuple[float, float] | None:
         """A solid body's outline's 1-σ (px, x and y) from its rim's contrast against the temporal model
@@ -295,30 +298,33 @@ class Pipeline:
         return parts_sigma(self.verifier.part_disparities(frame, b), b.disparity_sigma)
 
     def _centroid_extra(self, frame: StereoFrame, b: Blob, blobs: list[Blob]
-                        ) -> tuple[tuple[float, float], float, bool]:
-        """The centroid's further 1-σ (px, x and y): where the target is seen in part, where its outline
-        is drawn by warping (no temporal model at this pose: the cameras move; tracker.outline), the
-        outline's whole pixels and the parts of a body its segmentation may have missed in the notches of
-        its outline (tracker.segmentation); in quadrature, all being independent. The hull gap's x term
-        is returned apart (SigmaTerms.gap_x_px; `with_gap_x`), and whether a nearer background hides the
-        blob's bottom while its top is seen (SigmaTerms.hidden_below)."""
+                        ) -> tuple[tuple[float, float], float, bool, tuple[float, float]]:
+        """The centroid's further 1-σ (px, x and y): where its outline is drawn by warping (no temporal
+        model at this pose: the cameras move; tracker.outline), the outline's whole pixels and the parts of
+        a body its segmentation may have missed in the notches of its outline (tracker.segmentation); in
+        quadrature, all being independent. Returned apart: the hull gap's x term (SigmaTerms.gap_x_px;
+        `with_gap_x`), whether a nearer background hides the blob's bottom while its top is seen
+        (SigmaTerms.hidden_below), and what may be hidden where the target is seen in part
+        (SigmaTerms.cut_px, `_partly_seen`)."""
         others = [e for o in blobs if o is not b for e in object_and_shadow(o.box, o.mask, o.disparity, o.bg_disparity)]
-        px, py, hidden_below = self._partly_seen(frame, b, others)
+        hidden_below, cut = self._partly_seen(frame, b, others)
         edge, (gap_x, gap_y) = outline_sigma_px(b.mask)
+        px, py = 0.0, 0.0
         terms = [edge, (0.0, gap_y)]
         if self.subtractor.left_background(frame.gimbal) is None:
             terms.append(warped_outline_sigma_px(b.mask, self.outline))
         for ox, oy in terms:
             px, py = float(np.hypot(px, ox)), float(np.hypot(py, oy))
-        return (px, py), gap_x, hidden_below
+        return (px, py), gap_x, hidden_below, cut
 
     def _partly_seen(self, frame: StereoFrame, b: Blob, others: list[tuple[Box, BoolA, float]]
-                     ) -> tuple[float, float, bool]:
-        """The centroid's extra 1-σ (px, x and y) where the blob is cut by the image border, by another
-        object found this frame (others: box, mask, disparity) or, while the cameras are still (its
-        correspondence map is kept), by a nearer background; and, in quadrature, the offset of the rows down
-        to the ground where the blob's lowest part may be lost against it (tracker.visibility); and whether
-        a nearer background cuts its bottom and nothing its top."""
+                     ) -> tuple[bool, tuple[float, float]]:
+        """Whether a nearer background cuts the blob's bottom and nothing its top, and the centroid's
+        extra 1-σ (px, x and y) where the blob is cut by the image border, by another object found this
+        frame (others: box, mask, disparity) or, while the cameras are still (its correspondence map is
+        kept), by a nearer background, with the move across the cut sides; and, in quadrature, the offset
+        of the rows down to the ground where the blob's lowest part may be lost against it
+        (tracker.visibility). All of it is what may be hidden: SigmaTerms.cut_px."""
         mask, box = padded(b.mask, b.box, self.rig.left.size, left=2 + int(np.ceil(max(b.disparity, 0.0))),
                            below=2 + b.box[3] - b.box[1])
         cm = None if self.subtractor.moving else self.subtractor.correspondence(0, frame.gimbal, box)
@@ -333,7 +339,7 @@ class Pipeline:
         px, py = cut_sigma_px(b.mask, seen, self.visibility, tall)
         ux, uy = unseen_below(mask, b.disparity, disp, valid, self.visibility)
         hidden_below = seen.bottom_by_background and not seen.sides[2]
-        return float(np.sqrt(px * px + sx * sx + ux * ux)), float(np.sqrt(py * py + sy * sy + uy * uy)), hidden_below
+        return hidden_below, (float(np.sqrt(px * px + sx * sx + ux * ux)), float(np.sqrt(py * py + sy * sy + uy * uy)))
 
     def _foreground_low(self, blobs: list[Blob]) -> NDArray[np.uint8] | None:
         if not blobs:

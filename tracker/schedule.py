@@ -202,13 +202,16 @@ class SigmaTerms:
     body's outline's 1-σ (px, x and y) from its rim's contrast (tracker.rim_contrast; None: not known, the
     cameras moving, or no SolidPrior); hidden_below, a nearer background hides the target's bottom while
     its top is seen (tracker.visibility.Cuts; an upright body's centre is then found from its top,
-    tracker.localize.Localizer.locate)."""
+    tracker.localize.Localizer.locate); cut_px, the cut sides' own term (px, x and y; kappa times the
+    visible extent, tracker.visibility.cut_sigma_px), apart from centroid_px: the track's extents seen
+    whole bound it at the frame the terms are used for (tracker.segmentation.ExtentHistory)."""
 
     disparity_px: float
     centroid_px: tuple[float, float]
     gap_x_px: float = 0.0
     rim_px: tuple[float, float] | None = None
     hidden_below: bool = False
+    cut_px: tuple[float, float] = (0.0, 0.0)
 
 
 class SigmaSchedule:
