@@ -247,3 +247,27 @@ def test_a_plate_is_matched_on_what_the_right_camera_sees_beside_a_nearer_post()
     narrow[:, 20:] = True  # columns 80-99: 7 of 20 seen
     assert np.array_equal(seen_by_right(rect, box, narrow, 12.0, _background(ext, 5.0, (100, 120, 25.0)), ext,
                                         CFG), narrow)
+
+
+def test_an_object_found_before_hides_a_tracked_one_from_the_right_camera_as_a_post_does() -> None:
+    """The same plate before a background learnt without the post, the post found this frame as an object
+    (a walker at 12 m behind a ball at 5 m in the right image: two-targets:body): the plate's columns the
+    post's right image covers are left out as a learnt post's are, and none without it."""
+    from tracker.frames import StereoFrame
+    from tracker.verify import Blob
+
+    rng = np.random.default_rng(7)
+    tex = np.asarray(cv2.GaussianBlur(rng.uniform(0, 255, (H, W + 40)).astype(np.float32), (0, 0), 1.5))
+    xs = np.arange(W)
+    empty = (np.round(tex[:, :W]).astype(np.uint8), np.round(tex[:, np.round(xs + 5.0).astype(int)]).astype(np.uint8))
+    pipe = Pipeline(_ideal_rig())
+    pipe.learn_background(StereoFrame(0, empty[0], empty[1], 0.0, 0.0))
+    left, right = _plate_left_of_post()
+    frame = StereoFrame(1, left, right, 0.1, 0.1)
+    box, plate = (60, 200, 100, 260), np.ones((60, 40), bool)
+    assert np.array_equal(pipe.verifier.seen_by_right(frame, box, plate, 12.0), plate)
+    post = Blob((100, 200, 120, 260), np.ones((60, 20), bool), 1200, np.array([109.5, 229.5]),
+                np.array([109.5, 229.5]), 25.0, 0.01, 5.0, 1.0)
+    seen = pipe.verifier.seen_by_right(frame, box, plate, 12.0, [post])
+    cols = np.flatnonzero(seen.all(axis=0)) + box[0]
+    assert cols.min() == 60 and cols.max() in (85, 86) and not seen[:, 27:].any()
