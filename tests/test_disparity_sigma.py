@@ -21,6 +21,21 @@ def test_the_sigma_is_the_standard_error_of_the_parts_mean() -> None:
     assert np.isclose(scatter_sigma(d), np.std(d, ddof=1) / np.sqrt(8))
     assert scatter_sigma(d[:MIN_PARTS - 1]) == 0.0
     assert scatter_sigma([12.0] * 8) == 0.0
+    assert np.isclose(scatter_sigma(d, [0.02] * 8), scatter_sigma(d))  # equal weights: s / √n
+
+
+def test_the_whole_fit_leans_on_its_best_textured_parts_and_is_as_uncertain_as_their_weights_say() -> None:
+    """The whole region's fit is about the information-weighted mean of its parts (w_i ∝ 1 / σ_i²): with two
+    parts of eight of half the others' σ (four times their information), those two hold 8/14 of the weight
+    and the mean's standard error is s √Σ w², 1.25 times s / √8."""
+    d = [10.0, 10.2, 9.8, 10.1, 9.9, 10.0, 10.3, 9.7]
+    sig = [0.01, 0.01] + [0.02] * 6
+    w = np.array([1 / 0.01**2] * 2 + [1 / 0.02**2] * 6)
+    w /= w.sum()
+    s = np.std(d, ddof=1)
+    assert np.isclose(scatter_sigma(d, sig), s * np.sqrt(np.sum(w * w)))
+    assert np.isclose(scatter_sigma(d, sig) / scatter_sigma(d), np.sqrt(8 * np.sum(w * w)))
+    assert parts_sigma(d, 0.01, sig) == scatter_sigma(d, sig)
 
 
 def _pair(slope: float) -> tuple[np.ndarray, np.ndarray]:

@@ -36,26 +36,41 @@ MIN_PARTS = 5
 FEW_PARTS_FACTOR = 2.0
 
 
-def scatter_sigma(disparities: list[float]) -> float:
-    """The standard error of the mean of the parts' disparities (px), s / √n; 0 with fewer than MIN_PARTS
-    (too few to tell: the matcher's own σ then stands)."""
+def scatter_sigma(disparities: list[float], sigmas: list[float] | None = None) -> float:
+    """The standard error of the parts' mean disparity (px): s √Σ w_i², s their sample standard deviation,
+    w_i their weights in the whole region's fit, which is about the information-weighted mean of its parts
+    (w_i ∝ 1 / σ_i², σ_i each part's own fit's 1-σ, `sigmas`; s / √n with equal weights, or without
+    `sigmas`). A walker's parts differ in depth (limbs, head, torso), so that where their texture is
+    uneven the whole's fit is pulled towards the best textured: on walk:body at 9 to 17 m the disparity's
+    error against its seen surface's was 0.12 px rms, s / √n a median 0.08 px, s √Σ w² 0.10 to 0.11 px;
+    on walk:plate 0.026 px, against 0.012-0.024 and 0.013-0.028. 0 with fewer than MIN_PARTS (too few to
+    tell: the matcher's own σ then stands)."""
     n = len(disparities)
     if n < MIN_PARTS:
         return 0.0
-    return float(np.std(disparities, ddof=1) / np.sqrt(n))
+    w = np.ones(n) if sigmas is None else 1.0 / np.maximum(np.asarray(sigmas, np.float64), 1e-6) ** 2
+    w /= w.sum()
+    return float(np.std(disparities, ddof=1) * np.sqrt(np.sum(w * w)))
 
 
-def parts_sigma(disparities: list[float], matcher_sigma: float) -> float:
-    """The disparity's 1-σ from its parts (px): their scatter (scatter_sigma), or with fewer than MIN_PARTS
-    matched FEW_PARTS_FACTOR times the matcher's own σ (matcher_sigma, px)."""
+def parts_sigma(disparities: list[float], matcher_sigma: float, sigmas: list[float] | None = None) -> float:
+    """The disparity's 1-σ from its parts (px): their scatter (scatter_sigma, with the parts' own 1-σ
+    `sigmas`), or with fewer than MIN_PARTS matched FEW_PARTS_FACTOR times the matcher's own σ
+    (matcher_sigma, px)."""
     if len(disparities) < MIN_PARTS:
         return FEW_PARTS_FACTOR * matcher_sigma
-    return scatter_sigma(disparities)
+    return scatter_sigma(disparities, sigmas)
 
 
 def part_disparities(left: U8, right: U8, core: NDArray[np.generic], off: int, d: float,
                      min_score: float) -> list[float]:
-    """The disparities (px) of the COLUMNS x ROWS parts of a matched region, refined as
+    """The disparities (px) of the parts of a matched region (`part_fits`)."""
+    return [p for p, _ in part_fits(left, right, core, off, d, min_score)]
+
+
+def part_fits(left: U8, right: U8, core: NDArray[np.generic], off: int, d: float,
+              min_score: float) -> list[tuple[float, float]]:
+    """The disparities (px) and their own fits' 1-σ (px) of the COLUMNS x ROWS parts of a matched region, refined as
     tracker.stereo.refine_region refines each part alone from d, from one pass over the pixels.
 
     left, right: rectified strips (h, m) over the region's rows; core: the region's weights (h, n), nonzero
@@ -87,5 +102,5 @@ def part_disparities(left: U8, right: U8, core: NDArray[np.generic], off: int, d
         s1 = P.sum(axis=0)
         fit = refine_gram((P.T @ P - np.outer(s1, s1) / m).tolist(), float(m), p0, k)
         if fit is not None and abs(fit.d + p0) <= 1.0 and fit.score >= min_score:
-            out.append(off + fit.d)
+            out.append((off + fit.d, fit.sigma))
     return out

@@ -295,7 +295,8 @@ class Pipeline:
         matcher's own. A blob seen by one camera has its held disparity's 1-σ (tracker.one_camera)."""
         if b.one_camera:
             return b.disparity_sigma
-        return parts_sigma(self.verifier.part_disparities(frame, b), b.disparity_sigma)
+        fits = self.verifier.part_fits(frame, b)
+        return parts_sigma([d for d, _ in fits], b.disparity_sigma, [s for _, s in fits])
 
     def _centroid_extra(self, frame: StereoFrame, b: Blob, blobs: list[Blob]
                         ) -> tuple[tuple[float, float], float, bool, tuple[float, float]]:

@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 
 from tracker.bgdepth import CorrespondenceMap
 from tracker.detect import Box, StereoSubtractor
-from tracker.disparity_sigma import part_disparities
+from tracker.disparity_sigma import part_fits
 from tracker.frames import StereoFrame
 from tracker.growth import grow_tracked
 from tracker.masks import NEAR, found_pixels, key_mask, largest_component, seen_changed, taken_pixels, temporal_outline
@@ -289,15 +289,14 @@ class Verifier:
                     return None if strips.clipped and fine.disparity > strips.d_hi - 2.0 else fine
         return None
 
-    def part_disparities(self, frame: StereoFrame, blob: Blob) -> list[float]:
-        """The disparities (px) of the parts of a verified blob (tracker.disparity_sigma.part_disparities:
+    def part_fits(self, frame: StereoFrame, blob: Blob) -> list[tuple[float, float]]:
+        """The disparities (px) and 1-σ (px) of the parts of a verified blob (tracker.disparity_sigma.part_fits:
         the window `match_object` uses cut into a grid, each part refined from the blob's disparity on the
         same strips); the parts that do not match are left out."""
         strips = self._strips(frame, blob.box, blob.mask, blob.disparity)
         if strips is None:
             return []
-        return part_disparities(strips.left, strips.right, strips.core(blob.mask), strips.off, blob.disparity,
-                                MIN_SCORE)
+        return part_fits(strips.left, strips.right, strips.core(blob.mask), strips.off, blob.disparity, MIN_SCORE)
 
     def _outline_stereo(self, frame: StereoFrame, box: Box, m_left: BoolA,
                         d_hint: float | None) -> tuple[BoolA, BoolA, float] | None:
