@@ -107,3 +107,20 @@ def test_sigmas_the_calibration_could_not_estimate_count_as_not_modelled(tmp_pat
     save_rig(rig, tmp_path / "rig.json", section)
     sigma = load_rig(tmp_path / "rig.json").sigma
     assert sigma.disparity_px == 0.0 and sigma.principal_px == (0.0, 2.0)
+
+
+def test_a_centroid_whose_outline_terms_are_given_has_no_floor_of_its_own() -> None:
+    """The pipeline gives the centroid's whole 1-σ as extra_px (the outline's whole pixels, tracker.segmentation):
+    with centroid_sigma_px None the angles' 1-σ are those of extra_px alone, as a Localizer whose own 1-σ is
+    that figure and no extra gives them; the default's 0.5 / √area floor no longer stands on top."""
+    from tracker.localize import Localizer
+    from tracker.rectify import Rectifier
+    from tracker.sim.rig import default_rig
+
+    rect = Rectifier(default_rig())
+    c, d, area = np.array([360.0, 220.0]), 20.0, 1200  # 0.5 / √1200 = 0.0144 px
+    given = Localizer(rect, centroid_sigma_px=None).locate(c, d, 0.01, area, None, (0.03, 0.03))
+    own = Localizer(rect, centroid_sigma_px=0.03).locate(c, d, 0.01, area, None)
+    assert np.isclose(given.sigma_phi, own.sigma_phi) and np.isclose(given.sigma_theta, own.sigma_theta)
+    floor = Localizer(rect, centroid_sigma_px=0.0).locate(c, d, 0.01, area, None, (0.03, 0.03))
+    assert floor.sigma_phi > 1.05 * given.sigma_phi  # √(0.03² + 0.0144²) / 0.03 = 1.11

@@ -105,8 +105,8 @@ class Pipeline:
         self.subtractor = StereoSubtractor(self.bg, detector)
         self.verifier = Verifier(self.subtractor, self.rect)
         self.temporal = TemporalDetector(self.subtractor, self.verifier, temporal, one_camera)
-        # centroid σ 0: the outline's own is worked out in _centroid_extra
-        self.localizer = Localizer(self.rect, origin, centroid_sigma_px=0.0, solid=solid)
+        # no centroid σ of its own: the outline's is worked out in _centroid_extra
+        self.localizer = Localizer(self.rect, origin, centroid_sigma_px=None, solid=solid)
         self.tracker = MultiTracker(tracker)
         self.ego = PoseCompensation(rig.left)
         self.schedule = VerifySchedule(verify_budget_ms, later=between_frames)
