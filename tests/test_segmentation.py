@@ -168,3 +168,15 @@ def test_extent_history_keeps_no_frame_whose_area_fell_short() -> None:
         hist.cut_sigma_px(1, (30.0, 30.0), 600.0, 15.0, (0.0, 0.0))
     _, sy = hist.cut_sigma_px(1, (30.0, 30.0), 600.0, 15.0, (12.0, 12.0))
     assert sy == pytest.approx(np.sqrt(1.0 / 24.0 + (15.0 * 300.0 / 600.0) ** 2))
+
+
+def test_extent_history_keeps_each_axis_seen_whole_apart() -> None:
+    """A board coming in past the image's left edge (its width never seen whole, its height always): a
+    post's gap through it counted as a cut top is bounded by the height it showed, the width stays kappa's."""
+    hist = ExtentHistory()
+    for w in (10.0, 14.0, 18.0, 22.0):
+        assert hist.cut_sigma_px(1, (w, 29.0), 29.0 * w, 15.0, (11.2, 0.0), (False, True)) == (11.2, 0.0)
+    sx, sy = hist.cut_sigma_px(1, (24.0, 29.0), 29.0 * 24.0, 15.0, (12.0, 11.8), (False, False))
+    assert sx == 12.0 and sy == pytest.approx(0.5 / np.sqrt(6.0))  # no area history: nothing inside known
+    sx, sy = hist.cut_sigma_px(1, (24.0, 21.0), 21.0 * 24.0, 15.0, (12.0, 11.8), (False, False))
+    assert sy == pytest.approx(0.5 * np.sqrt(64.0 + 1.0 / 6.0))  # 8 px of its height hidden

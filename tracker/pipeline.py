@@ -223,7 +223,8 @@ class Pipeline:
         terms = self.sigma_schedule.terms(track_id, frame.index, start, lambda: self._sigma_terms(frame, b, blobs))
         _, _, w, h = cv2.boundingRect(b.mask.view(np.uint8))
         jump = self.heights.sigma_px(track_id, frame.index, float(h), b.disparity)
-        kx, ky = self.extents.cut_sigma_px(track_id, (float(w), float(h)), float(b.area), b.disparity, terms.cut_px)
+        kx, ky = self.extents.cut_sigma_px(track_id, (float(w), float(h)), float(b.area), b.disparity, terms.cut_px,
+                                           terms.seen_whole)
         cx = with_gap_x(float(np.hypot(terms.centroid_px[0], kx)), terms.gap_x_px, self.localizer.solid, w, h)
         cy = float(np.hypot(terms.centroid_px[1], ky))
         in_frame = b.box[1] > 0 and b.box[3] < self.rig.left.size[1]  # its box reaches neither top nor bottom
@@ -240,8 +241,9 @@ class Pipeline:
         return float(self.rect.rect_of_raw[0][y, x, 1]) - 0.5
 
     def _sigma_terms(self, frame: StereoFrame, b: Blob, blobs: list[Blob]) -> SigmaTerms:
-        extra, gap_x, hidden_below, cut = self._centroid_extra(frame, b, blobs)
-        return SigmaTerms(self._disparity_sigma(frame, b), extra, gap_x, self._rim_px(frame, b), hidden_below, cut)
+        extra, gap_x, hidden_below, cut, whole = self._centroid_extra(frame, b, blobs)
+        return SigmaTerms(self._disparity_sigma(frame, b), extra, gap_x, self._rim_px(frame, b), hidden_below, cut,
+                          whole)
 
     def _rim_px(self, frame: StereoFrame, b: Blob) -> tuple[float, float] | None:
         """A solid body's outline's 1-σ (px, x and y) from its rim's contrast against the temporal model
@@ -299,16 +301,16 @@ class Pipeline:
         return parts_sigma([d for d, _ in fits], b.disparity_sigma, [s for _, s in fits])
 
     def _centroid_extra(self, frame: StereoFrame, b: Blob, blobs: list[Blob]
-                        ) -> tuple[tuple[float, float], float, bool, tuple[float, float]]:
+                        ) -> tuple[tuple[float, float], float, bool, tuple[float, float], tuple[bool, bool]]:
         """The centroid's further 1-σ (px, x and y): where its outline is drawn by warping (no temporal
         model at this pose: the cameras move; tracker.outline), the outline's whole pixels and the parts of
         a body its segmentation may have missed in the notches of its outline (tracker.segmentation); in
         quadrature, all being independent. Returned apart: the hull gap's x term (SigmaTerms.gap_x_px;
         `with_gap_x`), whether a nearer background hides the blob's bottom while its top is seen
         (SigmaTerms.hidden_below), and what may be hidden where the target is seen in part
-        (SigmaTerms.cut_px, `_partly_seen`)."""
+        (SigmaTerms.cut_px and seen_whole, `_partly_seen`)."""
         others = [e for o in blobs if o is not b for e in object_and_shadow(o.box, o.mask, o.disparity, o.bg_disparity)]
-        hidden_below, cut = self._partly_seen(frame, b, others)
+        hidden_below, cut, whole = self._partly_seen(frame, b, others)
         edge, (gap_x, gap_y) = outline_sigma_px(b.mask)
         px, py = 0.0, 0.0
         terms = [edge, (0.0, gap_y)]
@@ -316,16 +318,17 @@ class Pipeline:
             terms.append(warped_outline_sigma_px(b.mask, self.outline))
         for ox, oy in terms:
             px, py = float(np.hypot(px, ox)), float(np.hypot(py, oy))
-        return (px, py), gap_x, hidden_below, cut
+        return (px, py), gap_x, hidden_below, cut, whole
 
     def _partly_seen(self, frame: StereoFrame, b: Blob, others: list[tuple[Box, BoolA, float]]
-                     ) -> tuple[bool, tuple[float, float]]:
+                     ) -> tuple[bool, tuple[float, float], tuple[bool, bool]]:
         """Whether a nearer background cuts the blob's bottom and nothing its top, and the centroid's
         extra 1-σ (px, x and y) where the blob is cut by the image border, by another object found this
         frame (others: box, mask, disparity) or, while the cameras are still (its correspondence map is
         kept), by a nearer background, with the move across the cut sides; and, in quadrature, the offset
         of the rows down to the ground where the blob's lowest part may be lost against it
-        (tracker.visibility). All of it is what may be hidden: SigmaTerms.cut_px."""
+        (tracker.visibility). All of it is what may be hidden: SigmaTerms.cut_px; and whether the width
+        and the height were seen whole (SigmaTerms.seen_whole)."""
         mask, box = padded(b.mask, b.box, self.rig.left.size, left=2 + int(np.ceil(max(b.disparity, 0.0))),
                            below=2 + b.box[3] - b.box[1])
         cm = None if self.subtractor.moving else self.subtractor.correspondence(0, frame.gimbal, box)
@@ -340,7 +343,10 @@ class Pipeline:
         px, py = cut_sigma_px(b.mask, seen, self.visibility, tall)
         ux, uy = unseen_below(mask, b.disparity, disp, valid, self.visibility)
         hidden_below = seen.bottom_by_background and not seen.sides[2]
-        return hidden_below, (float(np.sqrt(px * px + sx * sx + ux * ux)), float(np.sqrt(py * py + sy * sy + uy * uy)))
+        left, right, top, bottom = seen.sides
+        whole = (not (left or right) and ux == 0.0, not (top or bottom) and uy == 0.0)
+        cut = (float(np.sqrt(px * px + sx * sx + ux * ux)), float(np.sqrt(py * py + sy * sy + uy * uy)))
+        return hidden_below, cut, whole
 
     def _foreground_low(self, blobs: list[Blob]) -> NDArray[np.uint8] | None:
         if not blobs:

@@ -204,7 +204,9 @@ class SigmaTerms:
     its top is seen (tracker.visibility.Cuts; an upright body's centre is then found from its top,
     tracker.localize.Localizer.locate); cut_px, the cut sides' own term (px, x and y; kappa times the
     visible extent, tracker.visibility.cut_sigma_px), apart from centroid_px: the track's extents seen
-    whole bound it at the frame the terms are used for (tracker.segmentation.ExtentHistory)."""
+    whole bound it at the frame the terms are used for (tracker.segmentation.ExtentHistory); seen_whole,
+    whether its width and its height were seen whole (no side along that axis cut, nothing lost against
+    the ground along y)."""
 
     disparity_px: float
     centroid_px: tuple[float, float]
@@ -212,6 +214,7 @@ class SigmaTerms:
     rim_px: tuple[float, float] | None = None
     hidden_below: bool = False
     cut_px: tuple[float, float] = (0.0, 0.0)
+    seen_whole: tuple[bool, bool] = (True, True)
 
 
 class SigmaSchedule:

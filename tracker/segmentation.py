@@ -190,8 +190,9 @@ class HeightHistory:
 
 
 class ExtentHistory:
-    """A track's seen width, height and area over its disparity (w / d, h / d, A / d²: its size in metres
-    over f b) from the frames where it was seen whole (no side cut, tracker.visibility.cuts), to tell how
+    """A track's seen width and height over its disparity (w / d, h / d: its size in metres over f b), each
+    from the frames where that axis was seen whole (no side along it cut, tracker.visibility.cuts, and
+    nothing lost against the ground along y), and its area over d² from the frames seen whole, to tell how
     much of it the sides cut now hide.
 
     A cut side's 1-σ, kappa times the visible extent (tracker.visibility.extra_sigma_px), and the
@@ -204,43 +205,61 @@ class ExtentHistory:
     share of the seen area times half the extent. Each is as uncertain as the history's own scatter (its
     standard deviation scaled by d, d²: a walker's width changes with its stride) and the extents'
     rounding now (each end of the outline rounds by up to half a pixel, evenly: 1/√6 px rms). That 1-σ,
-    never more than kappa's, stands for kappa's. two-targets:plate, frames 102-180: a disc beside a nearer
-    crosser, seen whole, had kappa x its 31 px width, 12.4 px, along x and y, and a move across its cut
-    top of 9.9 px along x, where its centroid was off by under 0.01 px. A frame seen whole whose area falls
-    short of the history's by more than twice its scatter is not kept (a board sinking behind a hedge,
-    the cut not found in every frame); the history is kept while the track lives (a long cut must not
-    wear it out), and used from `min_frames` frames seen whole."""
+    never more than kappa's, stands for kappa's along an axis with a history. two-targets:plate, frames
+    102-180: a disc beside a nearer crosser, seen whole, had kappa x its 31 px width, 12.4 px, along x and
+    y, and a move across its cut top of 9.9 px along x, where its centroid was off by under 0.01 px; on
+    occlusion:plate a board coming in past the image's left edge and then behind posts, its height seen
+    whole throughout, had up to 12.5 px along y for errors of 0.01 px. A frame whose extent or area falls
+    short of the history's by more than twice its scatter and the rounding is not kept (a board sinking
+    behind a hedge, the cut not found in every frame); the history is kept while the track lives (a long
+    cut must not wear it out), and used from `min_frames` frames."""
 
     def __init__(self, frames: int = 15, min_frames: int = 3, round_px: float = 1.0):
         self.frames = frames
         self.min_frames = min_frames
         self.round_px = round_px
-        self._kept: dict[int, list[tuple[float, float, float]]] = {}  # track id -> (w/d, h/d, A/d²) seen whole
+        # track id -> the w / d, h / d and A / d² values kept
+        self._kept: dict[int, tuple[list[float], list[float], list[float]]] = {}
 
     def cut_sigma_px(self, track_id: int, extent_px: tuple[float, float], area_px: float, disparity: float,
-                     cut_px: tuple[float, float]) -> tuple[float, float]:
+                     cut_px: tuple[float, float], seen_whole: tuple[bool, bool] = (True, True)
+                     ) -> tuple[float, float]:
         """The cut sides' 1-σ (px, x and y) for a track's outline of extent_px (width, height, px) and
-        area_px (px²) at disparity d (px), given kappa's (cut_px; (0, 0): seen whole, kept for later)."""
+        area_px (px²) at disparity d (px), given kappa's (cut_px; (0, 0): seen whole) and whether its
+        width and height were seen whole (kept for later frames)."""
         if disparity <= 0 or area_px <= 0:
             return cut_px
-        kept = self._kept.setdefault(track_id, [])
-        scale = np.array([disparity, disparity, disparity * disparity])
-        if len(kept) >= self.min_frames:
-            ratios = np.array(kept)
-            expected, spread = np.median(ratios, axis=0) * scale, ratios.std(axis=0) * scale
-        if cut_px == (0.0, 0.0):
-            if len(kept) < self.min_frames or area_px >= expected[2] - 2.0 * spread[2]:
-                kept.append((extent_px[0] / disparity, extent_px[1] / disparity, area_px / scale[2]))
-                del kept[:-self.frames]
-            return cut_px
-        if len(kept) < self.min_frames:
-            return cut_px
-        short = np.maximum(expected[:2] - np.asarray(extent_px), 0.0)
-        inside = max(expected[2] - area_px - short[0] * expected[1] - short[1] * expected[0], 0.0)
-        var = 0.25 * (short**2 + spread[:2] ** 2 + self.round_px**2 / 6.0)
-        var += (0.5 * expected[:2] / area_px) ** 2 * (inside**2 + spread[2] ** 2)
-        out = [kappa if kappa <= 0.0 else min(kappa, float(np.sqrt(v))) for kappa, v in zip(cut_px, var, strict=True)]
+        kept = self._kept.setdefault(track_id, ([], [], []))
+        scale = (disparity, disparity, disparity * disparity)
+        now = (extent_px[0], extent_px[1], area_px)
+        stats = [self._stats(v, k) for v, k in zip(scale, kept, strict=True)]
+        for a, whole in enumerate((seen_whole[0], seen_whole[1], cut_px == (0.0, 0.0))):
+            st = stats[a]
+            if whole and (st is None or now[a] >= st[0] - 2.0 * st[1] - (self.round_px if a < 2 else 0.0)):
+                kept[a].append(now[a] / scale[a])
+                del kept[a][:-self.frames]
+        expected = [now[a] if st is None else st[0] for a, st in enumerate(stats[:2])]
+        short = [max(e - n, 0.0) for e, n in zip(expected, now[:2], strict=True)]
+        strips = short[0] * expected[1] + short[1] * expected[0]  # the area the extents' shortfalls hide
+        inside = 0.0 if stats[2] is None else max(stats[2][0] - area_px - strips, 0.0)
+        spread_a = 0.0 if stats[2] is None else stats[2][1]
+        out = []
+        for a, kappa in enumerate(cut_px):
+            st = stats[a]
+            if kappa <= 0.0 or st is None:
+                out.append(kappa)
+                continue
+            var = 0.25 * (short[a] ** 2 + st[1] ** 2 + self.round_px**2 / 6.0)
+            var += (0.5 * expected[a] / area_px) ** 2 * (inside**2 + spread_a**2)
+            out.append(min(kappa, float(np.sqrt(var))))
         return out[0], out[1]
+
+    def _stats(self, scale: float, kept: list[float]) -> tuple[float, float] | None:
+        """The median and standard deviation of the kept values, times scale; None with too few."""
+        if len(kept) < self.min_frames:
+            return None
+        v = np.asarray(kept)
+        return float(np.median(v)) * scale, float(v.std()) * scale
 
     def keep_only(self, track_ids: list[int]) -> None:
         """Forget the extents of tracks not in track_ids (ended)."""
