@@ -203,8 +203,9 @@ class ExtentHistory:
     The area hidden beyond what those strips account for (their length times the other extent) lies
     within the outline (a rail across a board: the extents stay whole): it moves the centroid by up to its
     share of the seen area times half the extent. Each is as uncertain as the history's own scatter (its
-    standard deviation scaled by d, d²: a walker's width changes with its stride) and the extents'
-    rounding now (each end of the outline rounds by up to half a pixel, evenly: 1/√6 px rms). That 1-σ,
+    standard deviation scaled by d, d²: a walker's width changes with its stride), at least the extents'
+    rounding (each end of the outline rounds by up to half a pixel, evenly: 1/√6 px rms; a board's kept
+    extents scatter by that rounding alone, which is not counted twice). That 1-σ,
     never more than kappa's, stands for kappa's along an axis with a history. two-targets:plate, frames
     102-180: a disc beside a nearer crosser, seen whole, had kappa x its 31 px width, 12.4 px, along x and
     y, and a move across its cut top of 9.9 px along x, where its centroid was off by under 0.01 px; on
@@ -249,7 +250,7 @@ class ExtentHistory:
             if kappa <= 0.0 or st is None:
                 out.append(kappa)
                 continue
-            var = 0.25 * (short[a] ** 2 + st[1] ** 2 + self.round_px**2 / 6.0)
+            var = 0.25 * (short[a] ** 2 + max(st[1] ** 2, self.round_px**2 / 6.0))
             var += (0.5 * expected[a] / area_px) ** 2 * (inside**2 + spread_a**2)
             out.append(min(kappa, float(np.sqrt(var))))
         return out[0], out[1]
