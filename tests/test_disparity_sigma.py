@@ -9,7 +9,7 @@ from tracker.disparity_sigma import (
     FEW_PARTS_FACTOR,
     MIN_PARTS,
     ROWS,
-    part_disparities,
+    part_fits,
     parts_sigma,
     scatter_sigma,
 )
@@ -38,6 +38,12 @@ def test_the_whole_fit_leans_on_its_best_textured_parts_and_is_as_uncertain_as_t
     assert parts_sigma(d, 0.01, sig) == scatter_sigma(d, sig)
 
 
+def _disparities(left: np.ndarray, right: np.ndarray, core: np.ndarray, off: int, d: float, min_score: float
+                 ) -> list[float]:
+    """The parts' disparities of part_fits (their own 1-σ left out)."""
+    return [p for p, _ in part_fits(left, right, core, off, d, min_score)]
+
+
 def _pair(slope: float) -> tuple[np.ndarray, np.ndarray]:
     """A textured surface whose disparity is 10 px + slope px per column (a surface turned from the axis)."""
     rng = np.random.default_rng(3)
@@ -54,7 +60,7 @@ def _pair(slope: float) -> tuple[np.ndarray, np.ndarray]:
 def test_each_part_is_refined_as_refine_region_refines_it_alone() -> None:
     left, right = _pair(0.02)  # 0.02 px a column: the parts' disparities differ
     core = np.ones((40, 48), np.uint8)  # rows 40..80, columns 56..104 of the images
-    ours = part_disparities(left[40:80], right[40:80], core, 56, 10.0, 0.8)
+    ours = _disparities(left[40:80], right[40:80], core, 56, 10.0, 0.8)
     alone = []
     for r in range(ROWS):
         for c in range(COLUMNS):
@@ -68,7 +74,7 @@ def test_each_part_is_refined_as_refine_region_refines_it_alone() -> None:
 def test_the_parts_of_a_slanted_surface_disagree_and_of_a_flat_one_agree() -> None:
     def parts(slope: float) -> list[float]:
         left, right = _pair(slope)
-        return part_disparities(left[40:80], right[40:80], np.ones((40, 48), np.uint8), 56, 10.0, 0.8)
+        return _disparities(left[40:80], right[40:80], np.ones((40, 48), np.uint8), 56, 10.0, 0.8)
     flat, slanted = parts(0.0), parts(0.02)
     assert len(flat) == len(slanted) == COLUMNS * ROWS
     assert np.allclose(flat, 10.0, atol=0.02)
@@ -82,8 +88,8 @@ def test_parts_without_texture_or_pixels_are_left_out() -> None:
     core[:, :12] = 0  # the first column of parts has no pixels
     flat = left[40:80].copy()
     flat[:20] = 128  # the top row of parts has no texture
-    assert len(part_disparities(flat, right[40:80], core, 56, 10.0, 0.8)) == COLUMNS - 1
-    assert part_disparities(left[40:80], right[40:80], core, 2, 10.0, 0.8) == []  # the strip ends
+    assert len(_disparities(flat, right[40:80], core, 56, 10.0, 0.8)) == COLUMNS - 1
+    assert _disparities(left[40:80], right[40:80], core, 2, 10.0, 0.8) == []  # the strip ends
 
 
 def test_too_few_parts_stand_for_twice_the_matchers_sigma_and_the_phase_term_is_in_every_range_sigma() -> None:

@@ -62,12 +62,6 @@ def parts_sigma(disparities: list[float], matcher_sigma: float, sigmas: list[flo
     return scatter_sigma(disparities, sigmas)
 
 
-def part_disparities(left: U8, right: U8, core: NDArray[np.generic], off: int, d: float,
-                     min_score: float) -> list[float]:
-    """The disparities (px) of the parts of a matched region (`part_fits`)."""
-    return [p for p, _ in part_fits(left, right, core, off, d, min_score)]
-
-
 def part_fits(left: U8, right: U8, core: NDArray[np.generic], off: int, d: float,
               min_score: float) -> list[tuple[float, float]]:
     """The disparities (px) and their own fits' 1-σ (px) of the COLUMNS x ROWS parts of a matched region, refined as

@@ -342,8 +342,8 @@ class Pipeline:
         tall = occluder_below(mask, b.disparity, disp, valid, self.visibility) if seen.bottom_by_background else None
         px, py = cut_sigma_px(b.mask, seen, self.visibility, tall)
         ux, uy = unseen_below(mask, b.disparity, disp, valid, self.visibility)
-        hidden_below = seen.bottom_by_background and not seen.sides[2]
         left, right, top, bottom = seen.sides
+        hidden_below = seen.bottom_by_background and not top
         whole = (not (left or right) and ux == 0.0, not (top or bottom) and uy == 0.0)
         cut = (float(np.sqrt(px * px + sx * sx + ux * ux)), float(np.sqrt(py * py + sy * sy + uy * uy)))
         return hidden_below, cut, whole

@@ -202,8 +202,9 @@ class SigmaTerms:
     body's outline's 1-σ (px, x and y) from its rim's contrast (tracker.rim_contrast; None: not known, the
     cameras moving, or no SolidPrior); hidden_below, a nearer background hides the target's bottom while
     its top is seen (tracker.visibility.Cuts; an upright body's centre is then found from its top,
-    tracker.localize.Localizer.locate); cut_px, the cut sides' own term (px, x and y; kappa times the
-    visible extent, tracker.visibility.cut_sigma_px), apart from centroid_px: the track's extents seen
+    tracker.localize.Localizer.locate); cut_px, what may be hidden where the target is seen in part (px,
+    x and y: the cut sides' kappa term, tracker.visibility.cut_sigma_px, the centroid's move across them
+    and the rows lost against the ground, in quadrature), apart from centroid_px: the track's extents seen
     whole bound it at the frame the terms are used for (tracker.segmentation.ExtentHistory); seen_whole,
     whether its width and its height were seen whole (no side along that axis cut, nothing lost against
     the ground along y)."""
