@@ -277,11 +277,8 @@ class TemporalDetector:
         all of them without a d0, or where that match fails), as the stereo stage matches a tracked object: a
         board beside a nearer box the right camera sees in front of its right side (endless:plate, frames
         240-251), matched with those columns too, was 1.4 px too near (0.5 m at 7.7 m) against 0.1 px."""
-        seen = obj if d0 is None else self.verifier.seen_by_right(frame, box, obj, d0)
-        fine = self.verifier.match_object(frame, box, seen, d0, radius, tracked)
-        if fine is None and seen is not obj and not np.array_equal(seen, obj):
-            fine = self.verifier.match_object(frame, box, obj, d0, radius, tracked)
-        return fine
+        seen = None if d0 is None else self.verifier.seen_by_right(frame, box, obj, d0)
+        return self.verifier.match_part_or_whole(frame, box, seen, obj, d0, radius, tracked)
 
     def _checked(self, frame: StereoFrame, box: Box, obj: BoolA, gain: float, fine: RegionMatch, hint: float | None,
                  radius: int) -> Blob | None:

@@ -186,9 +186,7 @@ class Verifier:
             if model is not None:  # cameras still: the temporal model draws the exact outline
                 obj, gain, changed = self._temporal_outline(frame, box, model, obj, either & free, found)
         radius, tracked = self.search_radius(d_hint), d_hint is not None
-        fine = None if matched is None else self.match_object(frame, box, matched, d0, radius, tracked)
-        if fine is None and (matched is None or not np.array_equal(matched, obj)):  # the same search, not twice
-            fine = self.match_object(frame, box, obj, d0, radius, tracked)
+        fine = self.match_part_or_whole(frame, box, matched, obj, d0, radius, tracked)
         if fine is None:
             return None
         if self.rim is not None and model is not None and changed is not None:  # cameras still (the model
@@ -288,6 +286,15 @@ class Verifier:
                 if fine is not None and strips is not None:
                     return None if strips.clipped and fine.disparity > strips.d_hi - 2.0 else fine
         return None
+
+    def match_part_or_whole(self, frame: StereoFrame, box: Box, part: BoolA | None, whole: BoolA, d0: float | None,
+                            radius: int, tracked: bool) -> RegionMatch | None:
+        """match_object on `part` of a region (the pixels the right camera sees, `seen_by_right`; None: no
+        such part), and where that fails or there is none, on the whole region (the same search not twice)."""
+        fine = None if part is None else self.match_object(frame, box, part, d0, radius, tracked)
+        if fine is None and (part is None or not np.array_equal(part, whole)):
+            fine = self.match_object(frame, box, whole, d0, radius, tracked)
+        return fine
 
     def part_fits(self, frame: StereoFrame, blob: Blob) -> list[tuple[float, float]]:
         """The disparities (px) and 1-σ (px) of the parts of a verified blob (tracker.disparity_sigma.part_fits:
