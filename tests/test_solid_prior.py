@@ -8,7 +8,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from sim_helpers import run_frames
 
+from tracker import pipeline
 from tracker.localize import Localizer, SolidPrior
 from tracker.rectify import Rectifier
 from tracker.sim.rig import default_rig
@@ -246,6 +248,25 @@ def test_a_person_whose_lower_part_is_hidden_is_placed_from_its_top() -> None:
     # a ball's top says nothing of its centre that way
     ball = loc.locate(*args, (0.0, 0.0), (60.0, 60.0), None, True, 150.0)
     assert math.isclose(float(rect.rig_to_rect(ball.rig[None, :])[1][0]), 220.0, abs_tol=1e-6)
+
+
+def test_a_person_hidden_below_gets_no_move_along_x_for_its_hidden_part(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    # foliage:body, frame 105: a walker behind the bush, its top seen. visibility.cuts finds its bottom cut
+    # and a move of the centroid along x across it (the hidden part taken to go on beyond the bush's edge
+    # away from the centroid); an upright body's hidden legs stand under what is seen, so none counts. A
+    # body the prior does not take for upright keeps the move.
+    found = []
+    real = pipeline.cuts
+    monkeypatch.setattr(pipeline, "cuts", lambda *a, **k: found.append(real(*a, **k)) or found[-1])
+    pipe, sf, res = run_frames("foliage:body", 105)
+    (det,) = res.detections
+    found.clear()
+    terms = pipe._sigma_terms(sf.frame, det.blob, [det.blob])
+    assert terms.hidden_below and found[-1].sides[3] and found[-1].skew[0] > 0.5
+    assert terms.cut_px[0] == 0.0 and terms.cut_px[1] > 10.0
+    pipe.localizer.solid = SolidPrior(upright_aspect=10.0)  # not upright: the move stands
+    assert math.isclose(pipe._sigma_terms(sf.frame, det.blob, [det.blob]).cut_px[0], found[-1].skew[0],
+                        rel_tol=1e-9)
 
 
 def test_a_round_body_is_placed_at_the_centre_of_a_sphere_behind_its_seen_face() -> None:

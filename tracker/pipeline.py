@@ -328,7 +328,12 @@ class Pipeline:
         kept), by a nearer background, with the move across the cut sides; and, in quadrature, the offset
         of the rows down to the ground where the blob's lowest part may be lost against it
         (tracker.visibility). All of it is what may be hidden: SigmaTerms.cut_px; and whether the width
-        and the height were seen whole (SigmaTerms.seen_whole)."""
+        and the height were seen whole (SigmaTerms.seen_whole). An upright body (a person) whose bottom a
+        nearer background hides, its top seen, has no move along x across that bottom: `cuts` takes the
+        hidden part to go on beyond the occluder's edge away from the visible centroid, but a person's
+        hidden legs stand under what is seen. On the frames such a body is placed from its top (walk,
+        foliage, two-targets, endless), that move made the centroid's x term 0.45 to 1.17 px (medians)
+        for azimuth errors of 0.15 to 0.27 px (medians); 90 to 98 % of those frames were within 1σ."""
         mask, box = padded(b.mask, b.box, self.rig.left.size, left=2 + int(np.ceil(max(b.disparity, 0.0))),
                            below=2 + b.box[3] - b.box[1])
         cm = None if self.subtractor.moving else self.subtractor.correspondence(0, frame.gimbal, box)
@@ -344,9 +349,19 @@ class Pipeline:
         ux, uy = unseen_below(mask, b.disparity, disp, valid, self.visibility)
         left, right, top, bottom = seen.sides
         hidden_below = seen.bottom_by_background and not top
+        if hidden_below and self._upright(b):  # a person's hidden lower part stands under what is seen
+            sx = 0.0
         whole = (not (left or right) and ux == 0.0, not (top or bottom) and uy == 0.0)
         cut = (float(np.sqrt(px * px + sx * sx + ux * ux)), float(np.sqrt(py * py + sy * sy + uy * uy)))
         return hidden_below, cut, whole
+
+    def _upright(self, b: Blob) -> bool:
+        """Whether the blob is an upright body by the SolidPrior (its outline's width and height)."""
+        solid = self.localizer.solid
+        if solid is None:
+            return False
+        _, _, w, h = cv2.boundingRect(b.mask.view(np.uint8))
+        return solid.upright(float(w), float(h))
 
     def _foreground_low(self, blobs: list[Blob]) -> NDArray[np.uint8] | None:
         if not blobs:
