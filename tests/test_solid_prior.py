@@ -114,27 +114,36 @@ def _moved_by(rect: Rectifier, args: tuple[np.ndarray, float, float, int, None, 
 
 
 def test_an_upright_bodys_azimuth_sigma_is_a_share_of_its_height_in_place_of_the_rims() -> None:
-    # along x a person's 1-σ is upright_x_sigma times its seen height, not rim_sigma_px / √2: as if that
-    # were seen-in-part's extra_px along x, the rim's y term kept
+    # along x a person's 1-σ is upright_x_sigma times its seen height, not the rim's term (rim_px, from the
+    # rim's contrast while the cameras are still): as if that were seen-in-part's extra_px along x, the
+    # rim's y term kept. While the cameras move (rim_px None: the outline warped, no rim contrast) the
+    # fixed rim term counts along x as well.
     rect = Rectifier(default_rig())
     base = (np.array([380.0, 200.0]), 12.0, 0.05, 400, None)
     rim = 0.5 / math.sqrt(2.0)
+    sharp = (rim, rim)
 
-    def loc(prior: SolidPrior, extra: tuple[float, float], extent: tuple[float, float]):  # type: ignore[no-untyped-def]
-        return Localizer(rect, solid=prior).locate(*base, extra, extent)
+    def loc(prior: SolidPrior, extra: tuple[float, float], extent: tuple[float, float],  # type: ignore[no-untyped-def]
+            rim_px: tuple[float, float] | None):
+        return Localizer(rect, solid=prior).locate(*base, extra, extent, rim_px)
 
-    person = loc(SolidPrior(upright_sigma=0.0, upright_x_sigma=0.005), (0.0, 0.0), (40.0, 200.0))
-    same = loc(SolidPrior(rim_sigma_px=0.0, upright_sigma=0.0, upright_x_sigma=0.0), (1.0, rim), (40.0, 200.0))
+    prior = SolidPrior(upright_sigma=0.0, upright_x_sigma=0.005)
+    bare = SolidPrior(rim_sigma_px=0.0, upright_sigma=0.0, upright_x_sigma=0.0)
+    person = loc(prior, (0.0, 0.0), (40.0, 200.0), sharp)
+    same = loc(bare, (1.0, rim), (40.0, 200.0), (0.0, 0.0))
     assert np.allclose(person.cov_world, same.cov_world, rtol=1e-12, atol=0.0)
-    cut = loc(SolidPrior(upright_sigma=0.0, upright_x_sigma=0.005), (0.7, 0.0), (40.0, 200.0))  # both count
-    same = loc(SolidPrior(rim_sigma_px=0.0, upright_sigma=0.0, upright_x_sigma=0.0), (math.hypot(1.0, 0.7), rim),
-               (40.0, 200.0))
+    cut = loc(prior, (0.7, 0.0), (40.0, 200.0), sharp)  # both count
+    same = loc(bare, (math.hypot(1.0, 0.7), rim), (40.0, 200.0), (0.0, 0.0))
     assert np.allclose(cut.cov_world, same.cov_world, rtol=1e-12, atol=0.0)
-    taller = loc(SolidPrior(upright_sigma=0.0, upright_x_sigma=0.005), (0.0, 0.0), (40.0, 400.0))
+    moving = loc(prior, (0.0, 0.0), (40.0, 200.0), None)
+    same = loc(bare, (math.hypot(1.0, rim), rim), (40.0, 200.0), (0.0, 0.0))
+    assert np.allclose(moving.cov_world, same.cov_world, rtol=1e-12, atol=0.0)
+    assert moving.sigma_theta > 1.02 * person.sigma_theta
+    taller = loc(prior, (0.0, 0.0), (40.0, 400.0), sharp)
     assert taller.sigma_theta > 1.5 * person.sigma_theta
-    ball = loc(SolidPrior(upright_sigma=0.0, upright_x_sigma=0.005), (0.0, 0.0), (60.0, 60.0))
-    bare = loc(SolidPrior(rim_sigma_px=0.0, upright_sigma=0.0), (rim, rim), (60.0, 60.0))
-    assert np.allclose(ball.cov_world, bare.cov_world, rtol=1e-12, atol=0.0)
+    ball = loc(prior, (0.0, 0.0), (60.0, 60.0), None)
+    plain = loc(SolidPrior(rim_sigma_px=0.0, upright_sigma=0.0), (rim, rim), (60.0, 60.0), None)
+    assert np.allclose(ball.cov_world, plain.cov_world, rtol=1e-12, atol=0.0)
 
 
 def test_a_wide_body_has_its_own_depth_prior() -> None:
