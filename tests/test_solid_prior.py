@@ -13,6 +13,7 @@ from sim_helpers import run_frames
 from tracker import pipeline
 from tracker.localize import Localizer, SolidPrior
 from tracker.rectify import Rectifier
+from tracker.segmentation import outline_sigma_px
 from tracker.sim.rig import default_rig
 
 
@@ -276,6 +277,22 @@ def test_a_person_hidden_below_gets_no_move_along_x_for_its_hidden_part(monkeypa
     pipe.localizer.solid = SolidPrior(upright_aspect=10.0)  # not upright: the move stands
     assert math.isclose(pipe._sigma_terms(sf.frame, det.blob, [det.blob]).cut_px[0], found[-1].skew[0],
                         rel_tol=1e-9)
+
+
+def test_a_wide_bodys_outline_notches_are_its_shape_not_missed_pixels() -> None:
+    # occlusion:body, frame 100: a car side-on, its cabin over its body. The convex hull's gap beside the
+    # cabin is the car's own shape, not parts the segmentation missed: no hull-gap term along y. A body the
+    # prior does not take for wide keeps it.
+    pipe, sf, res = run_frames("occlusion:body", 100)
+    (det,) = res.detections
+    _, (_, gap_y) = outline_sigma_px(det.blob.mask)
+    assert gap_y > 2.0
+    edge_y = outline_sigma_px(det.blob.mask)[0][1]
+    terms = pipe._sigma_terms(sf.frame, det.blob, [det.blob])
+    assert math.isclose(terms.centroid_px[1], edge_y, rel_tol=1e-9)
+    pipe.localizer.solid = SolidPrior(wide_aspect=10.0)  # not wide: the gap counts
+    narrow = pipe._sigma_terms(sf.frame, det.blob, [det.blob])
+    assert math.isclose(narrow.centroid_px[1], math.hypot(edge_y, gap_y), rel_tol=1e-9)
 
 
 def test_a_round_body_is_placed_at_the_centre_of_a_sphere_behind_its_seen_face() -> None:
