@@ -236,8 +236,10 @@ class Localizer:
             w, h = extent_px
             person = self.solid.upright(w, h)
             upright = self.solid.upright_sigma * h if person else 0.0
-            # x: limbs or rim; a person's limbs and, while the cameras move (no rim contrast), the rim too
-            S[0, 0] += (self.solid.upright_x_sigma * h) ** 2 + (rx**2 if rim_px is None else 0.0) if person else rx**2
+            if person:  # x: its limbs and, while the cameras move (no rim contrast), the rim too
+                S[0, 0] += (self.solid.upright_x_sigma * h) ** 2 + (rx**2 if rim_px is None else 0.0)
+            else:  # x: the rim
+                S[0, 0] += rx**2
             if from_top is not None:  # y: the top's own edge and the height's share, not what is hidden
                 S[1, 1] = s_c**2 + s_cy**2 + self.solid.rim_sigma_px**2 + from_top[1] ** 2
             else:

@@ -313,17 +313,18 @@ class Pipeline:
         the segmentation missed (occlusion:body, frames 50-174: 2.3 to 3.0 px along y, medians, for
         elevation errors of 0.32 to 1.56 px rms; 100 % of those frames within 1σ)."""
         others = [e for o in blobs if o is not b for e in object_and_shadow(o.box, o.mask, o.disparity, o.bg_disparity)]
-        hidden_below, cut, whole = self._partly_seen(frame, b, others)
+        upright, wide = self._seen_as(b)
+        hidden_below, cut, whole = self._partly_seen(frame, b, others, upright)
         edge, (gap_x, gap_y) = outline_sigma_px(b.mask)
         px, py = 0.0, 0.0
-        terms = [edge, (0.0, 0.0 if self._seen_as(b)[1] else gap_y)]  # a car's cabin over its body: its shape
+        terms = [edge, (0.0, 0.0 if wide else gap_y)]  # a car's cabin over its body: its shape
         if self.subtractor.left_background(frame.gimbal) is None:
             terms.append(warped_outline_sigma_px(b.mask, self.outline))
         for ox, oy in terms:
             px, py = float(np.hypot(px, ox)), float(np.hypot(py, oy))
         return (px, py), gap_x, hidden_below, cut, whole
 
-    def _partly_seen(self, frame: StereoFrame, b: Blob, others: list[tuple[Box, BoolA, float]]
+    def _partly_seen(self, frame: StereoFrame, b: Blob, others: list[tuple[Box, BoolA, float]], upright: bool
                      ) -> tuple[bool, tuple[float, float], tuple[bool, bool]]:
         """Whether a nearer background cuts the blob's bottom and nothing its top, and the centroid's
         extra 1-σ (px, x and y) where the blob is cut by the image border, by another object found this
@@ -331,7 +332,7 @@ class Pipeline:
         kept), by a nearer background, with the move across the cut sides; and, in quadrature, the offset
         of the rows down to the ground where the blob's lowest part may be lost against it
         (tracker.visibility). All of it is what may be hidden: SigmaTerms.cut_px; and whether the width
-        and the height were seen whole (SigmaTerms.seen_whole). An upright body (a person) whose bottom a
+        and the height were seen whole (SigmaTerms.seen_whole). An upright body (`upright`: a person) whose bottom a
         nearer background hides, its top seen, has no move along x across that bottom: `cuts` takes the
         hidden part to go on beyond the occluder's edge away from the visible centroid, but a person's
         hidden legs stand under what is seen. On the frames such a body is placed from its top (walk,
@@ -352,7 +353,7 @@ class Pipeline:
         ux, uy = unseen_below(mask, b.disparity, disp, valid, self.visibility)
         left, right, top, bottom = seen.sides
         hidden_below = seen.bottom_by_background and not top
-        if hidden_below and self._seen_as(b)[0]:  # a person's hidden lower part stands under what is seen
+        if hidden_below and upright:  # a person's hidden lower part stands under what is seen
             sx = 0.0
         whole = (not (left or right) and ux == 0.0, not (top or bottom) and uy == 0.0)
         cut = (float(np.sqrt(px * px + sx * sx + ux * ux)), float(np.sqrt(py * py + sy * sy + uy * uy)))
