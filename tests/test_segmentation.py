@@ -152,6 +152,20 @@ def test_extent_history_bounds_a_cut_by_what_the_track_showed_whole() -> None:
     assert hist.cut_sigma_px(1, (20.0, 30.0), 600.0, 15.0, (8.0, 0.0)) == (8.0, 0.0)
 
 
+def test_extent_history_counts_a_strip_the_outline_took_in_beyond_the_target() -> None:
+    # endless:plate, frames 1329-1331: a board at the image's edge drawn with a ghost strip beside it
+    hist = ExtentHistory()
+    for _ in range(5):  # a board 30 px across at 15 px of disparity, seen whole
+        hist.cut_sigma_px(1, (30.0, 30.0), 900.0, 15.0, (0.0, 0.0))
+    # 12 px wider than it ever was, cut by the image's edge (not seen whole, not kept) yet no narrower than
+    # the history, which bounded it to the rounding: the centroid lies up to 6 px off along x
+    sx, sy = hist.cut_sigma_px(1, (42.0, 30.0), 1260.0, 15.0, (16.8, 12.0), (False, True))
+    assert sx == pytest.approx(0.5 * np.sqrt(144.0 + 1.0 / 6.0)) and sy == pytest.approx(0.5 / np.sqrt(6.0))
+    # a pixel wider is the outline's rounding (within twice the scatter and the rounding): nothing taken in
+    sx, _ = hist.cut_sigma_px(1, (31.0, 30.0), 930.0, 15.0, (12.4, 12.0))
+    assert sx == pytest.approx(0.5 / np.sqrt(6.0))
+
+
 def test_extent_history_widens_by_how_much_the_whole_target_varied() -> None:
     hist = ExtentHistory()
     for w in (40.0, 50.0, 40.0, 50.0):  # a walker's width with its stride, at disparity 10 px
