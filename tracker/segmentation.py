@@ -244,7 +244,7 @@ class ExtentHistory:
         stats = [self._stats(v, k) for v, k in zip(scale, kept, strict=True)]
         for a, whole in enumerate((seen_whole[0], seen_whole[1], cut_px == (0.0, 0.0))):
             st = stats[a]
-            if whole and (st is None or now[a] >= st[0] - 2.0 * st[1] - (self.round_px if a < 2 else 0.0)):
+            if whole and (st is None or now[a] >= st[0] - self._slack(st[1], a)):
                 kept[a].append(now[a] / scale[a])
                 del kept[a][:-self.frames]
         if cut_px == (0.0, 0.0):  # nothing cut: nothing to bound
@@ -260,16 +260,18 @@ class ExtentHistory:
             if kappa <= 0.0 or st is None:
                 out.append(kappa)
                 continue
-            off = max(short[a], self._excess(now[a] - expected[a], st[1]))  # hidden, or taken in
+            over = now[a] - expected[a]  # a strip taken in that is not the target's, past the slack
+            off = max(short[a], over if over > self._slack(st[1], a) else 0.0)  # hidden, or taken in
             var = 0.25 * (off**2 + max(st[1] ** 2, self.round_px**2 / 6.0))
             var += (0.5 * expected[a] / area_px) ** 2 * (inside**2 + spread_a**2)
             out.append(min(kappa, float(np.sqrt(var))))
         return out[0], out[1]
 
-    def _excess(self, over: float, spread: float) -> float:
-        """How far (px) an extent exceeds the history's, where that is past twice its scatter `spread` and
-        the rounding (a strip the outline took in that is not the target's); 0 within that."""
-        return over if over > 2.0 * spread + self.round_px else 0.0
+    def _slack(self, spread: float, axis: int) -> float:
+        """How far a value may stray from the history's median and still be the whole target's: twice the
+        history's scatter `spread`, and the rounding for an extent (axis 0, 1; not the area, axis 2). A frame
+        short by more is not kept; an extent over by more took in a strip that is not the target's."""
+        return 2.0 * spread + (self.round_px if axis < 2 else 0.0)
 
     def _stats(self, scale: float, kept: list[float]) -> tuple[float, float] | None:
         """The median and (population) standard deviation of the kept values, times scale; None with too
