@@ -290,3 +290,33 @@ def test_the_temporal_outlines_gain_leaves_out_an_object_found_before_at_another
     assert g_all > 1.2 and abs(g - 1.0) < 0.02
     assert obj_all[region].all()  # at the wrong gain the whole region "changed" (and its rim)
     assert int(obj.sum()) == 400 and obj[30:50, 20:40].all()  # at the right one, the object alone
+
+
+def test_the_temporal_outline_keeps_a_head_past_the_necks_gap_but_no_part_beside_or_below() -> None:
+    # walk:body frames 2-3: the neck and collar close to the background's grey, the head a region apart,
+    # left out of the outline, put the walker's centroid 12 px low
+    from tracker.masks import temporal_outline, with_head
+
+    rng = np.random.default_rng(5)
+    bg = np.asarray(cv2.GaussianBlur(rng.uniform(60, 120, (220, 120)).astype(np.float32), (0, 0), 1.0), np.float32)
+    key = bg.copy()
+    key[60:200, 40:80] += 40.0  # the torso and legs: 140 rows, parts join up to 0.1 x 140 = 14 rows above
+    yy, xx = np.mgrid[0:220, 0:120]
+    head = (yy - 45) ** 2 + (xx - 60) ** 2 <= 9**2  # its lowest row 54, 6 rows above the torso
+    key[head] += 40.0
+    region = np.zeros(bg.shape, bool)
+    region[30:205, 30:90] = True
+    dev = np.full(bg.shape, 1.0, np.float32)
+    obj, _, _ = temporal_outline(key.astype(np.uint8), bg, dev, np.zeros_like(region), region, 12)
+    assert obj[head].all() and obj[60:200, 40:80].all() and not obj[55:59, 30:90].any()
+    body = np.zeros(bg.shape, bool)
+    body[60:200, 40:80] = True
+    below = np.zeros_like(body)
+    below[204:216, 50:70] = True  # 4 rows under the body: legs cut off by a band are left to verify_all
+    beside = np.zeros_like(body)
+    beside[30:58, 86:100] = True  # above the top but past the body's columns: a neighbour's head
+    speck = np.zeros_like(body)
+    speck[40:46, 73:79] = True  # 36 px above the body, within its columns: under HEAD_MIN_PX, noise
+    out = with_head(body | below | beside | speck | head)
+    assert out[head].all() and out[body].all()
+    assert not out[below].any() and not out[beside].any() and not out[speck].any()

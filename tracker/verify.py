@@ -21,7 +21,16 @@ from tracker.detect import Box, StereoSubtractor
 from tracker.disparity_sigma import part_fits
 from tracker.frames import StereoFrame
 from tracker.growth import grow_tracked
-from tracker.masks import NEAR, found_pixels, key_mask, largest_component, seen_changed, taken_pixels, temporal_outline
+from tracker.masks import (
+    NEAR,
+    found_pixels,
+    key_mask,
+    largest_component,
+    seen_changed,
+    taken_pixels,
+    temporal_outline,
+    with_head,
+)
 from tracker.one_camera import OneCameraConfig, seen_by_right
 from tracker.rectify import Rectifier
 from tracker.regions import background_disparity, hints_around, mask_centroid, nearest_hint, row_thirds
@@ -224,7 +233,7 @@ class Verifier:
         m_right = self.right_key_at(frame, box, d_hint)
         wide, gain, changed = self._temporal_outline(frame, box, model, None, (m_left | m_right) & free, found)
         if matched.any():  # what the right key adds to it (joined through it, a ghost the left key alone
-            wide = largest_component(matched | (wide & m_right))  # sees would be taken in)
+            wide = with_head(matched | (wide & m_right))  # sees would be taken in)
         if int(np.count_nonzero(wide)) >= 4 * self.cfg.min_area_px:  # not a sliver: see growth.grown_by_change
             wide = grow_tracked(self.rect, frame, box, cm, model[0], wide, changed & free, d_hint, self.cfg.epsilon)
         if len(around) > 1:  # other tracks predicted about the region: keep the pixels at this one's d
