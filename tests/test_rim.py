@@ -293,3 +293,36 @@ def test_the_keys_recovery_keeps_half_a_window_off_the_pictures_edge_and_nothing
     cut = _off_edges(m, 2)
     assert cut[2:4, 2:5].all() and int(cut.sum()) == 2 * 3
     assert _off_edges(m, 0).all()  # a 1-px window reaches nothing past its pixel
+
+
+def test_with_the_cameras_still_a_far_leg_near_the_learnt_grey_joins_where_the_stereo_pictures_decide() -> None:
+    """A walker's shaded far leg (walk:body, 3-4 m) is within 2 grey levels a pixel of the learnt background
+    over a window, so the temporal picture does not beat the object's by the margin, though both stereo
+    pictures of the background are far off: it joins where the background lies a window's width of
+    disparity behind (`deep`), and not without that. The wall beside the ball's left edge, the temporal
+    picture stale there alike, stays out: the left key's test lands on the ball (its occlusion shadow)."""
+    rng = np.random.default_rng(7)
+    yy, xx = np.mgrid[0:H, 0:W]
+    ball = np.hypot(xx - 60.0, yy - 45.0) <= 25.0
+    leg = ball & (xx > 66)  # the part lost, more than a band wide: grown into round by round
+    shadow = ~ball & (xx >= 27) & (xx < 35) & (abs(yy - 45) <= 10)  # Δd = 8 px left of the ball
+    learnt = _texture(rng, 110.0, 18.0)[:, :W]
+    own = rng.choice([-1.4, 1.4], size=(H, W))  # its own texture: 1.4 grey levels off the background
+    left = np.where(ball | shadow, learnt + own, learnt) + rng.normal(0.0, 0.8, (H, W))
+    right_obj = left + rng.normal(0.0, 0.8, (H, W))  # the object's picture matches it
+    other = _texture(rng, 140.0, 25.0)[:, :W]  # the stereo pictures of the background: far off everywhere
+    u8 = lambda a: np.clip(a, 0, 255).astype(np.uint8)  # noqa: E731
+    pics = _pictures(u8(left), [u8(right_obj)], u8(other), u8(learnt))
+    ahead, behind = along_rows(ball.shape, np.full(ball.shape, float(D_OBJ - D_BG), np.float32))
+    c_o, c_t = pics.c_o[leg].astype(float), pics.c_t[leg].astype(float)  # type: ignore[union-attr]
+    n_w = RimConfig().window_px ** 2
+    assert np.median(c_t - c_o) < n_w and np.median(c_t - c_o) > n_w / 2  # between half the margin and it
+    deep = np.ones_like(ball)
+    args = (u8(other), ahead, behind, np.ones_like(ball), RimConfig(), 12)
+    before = recover_rim_keys(ball & ~leg, pics, *args)
+    after = recover_rim_keys(ball & ~leg, pics, *args, deep)
+    assert np.count_nonzero(before & leg) < 0.1 * np.count_nonzero(leg)
+    assert np.count_nonzero(after & leg) > 0.7 * np.count_nonzero(leg)  # 515 of 661 px: 4 px stay out at the edge
+    assert np.count_nonzero(after & shadow) == 0 and np.count_nonzero(after & ~ball & ~shadow) <= 8
+    shallow = recover_rim_keys(ball & ~leg, pics, *args, np.zeros_like(ball))
+    assert np.array_equal(shallow, before)
