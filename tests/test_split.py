@@ -293,8 +293,8 @@ def test_the_temporal_outlines_gain_leaves_out_an_object_found_before_at_another
 
 
 def test_the_temporal_outline_keeps_a_head_past_the_necks_gap_but_no_part_beside_or_below() -> None:
-    # walk:body frames 2-3: the neck and collar close to the background's grey, the head a region apart,
-    # left out of the outline, put the walker's centroid 12 px low
+    # walk:body frames 2-3: the head 2 cm above the torso (4 px of background at 3 m), a region apart,
+    # left out of the outline, put the walker's centroid 10-12 px low
     from tracker.masks import temporal_outline, with_head
 
     rng = np.random.default_rng(5)

@@ -48,9 +48,10 @@ HEAD_MIN_PX = 64
 
 def with_head(mask: BoolA, close: bool = False) -> BoolA:
     """largest_component, and each other component wholly above it that is a part of its body
-    (split.same_body at one depth): a head past the neck's gap. The temporal model draws a walker's neck
-    and collar close to the background's grey, so its head is a region apart. Left out, the centroid
-    falls by 12 px on a walker 3 m away (walk:body, frames 2-3; against the seen surface, elevation RMSE
+    (split.same_body at one depth): a head past the neck's gap. A neck is narrower than the head and often
+    near the background's grey (the simulator's walkers have none: the head 2 cm above the torso, 4 px of
+    background at 3 m), so the change mask holds the head as a region apart. Left out, the centroid
+    falls by 10-12 px on a walker 3 m away (walk:body, frames 2-3; against the seen surface, elevation RMSE
     0.316 -> 0.256 deg on walk:body, 0.338 -> 0.273 on illumination, 0.304 -> 0.252 on foliage). Only
     above: legs cut from a torso by the background's bands, added back, moved the track's prediction off
     the torso a stopped walker's key region was left with (endless:body, identity switches 5 -> 10)."""
