@@ -60,14 +60,17 @@ def with_head(mask: BoolA, close: bool = False) -> BoolA:
         return _filled(list(contours), mask.shape) if contours else np.zeros_like(mask)
     areas = [cv2.contourArea(c) for c in contours]
     big = int(np.argmax(areas))
-    body = _filled([contours[big]], mask.shape)
-    top = int(np.flatnonzero(body.any(axis=1))[0])
+    top = cv2.boundingRect(contours[big])[1]
+    body: BoolA | None = None
     keep = [contours[big]]
     for c, area in zip(contours, areas, strict=True):
         if c is contours[big] or area < max(HEAD_MIN_PX, HEAD_MIN_SHARE * areas[big]):
             continue
-        part = _filled([c], mask.shape)
-        if int(np.flatnonzero(part.any(axis=1))[-1]) < top and same_body(body, 1.0, part, 1.0):
+        _, y, _, h = cv2.boundingRect(c)
+        if y + h - 1 >= top:  # not wholly above the body: not drawn at all
+            continue
+        body = _filled([contours[big]], mask.shape) if body is None else body
+        if same_body(body, 1.0, _filled([c], mask.shape), 1.0):
             keep.append(c)
     return _filled(keep, mask.shape)
 
