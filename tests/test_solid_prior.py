@@ -24,7 +24,8 @@ def _pair(z_m: float, extent_px: tuple[float, float]):  # type: ignore[no-untype
     args = (np.array([x, y]), d, 0.05, 400, None, (0.0, 0.0), extent_px)
     flat = Localizer(rect).locate(*args)
     prior = SolidPrior(0.5, 0.3, rim_sigma_px=0.0, upright_sigma=0.0, upright_ratio=0.5, upright_ratio_sigma=0.3,
-                       upright_x_sigma=0.0, wide_ratio=0.5, wide_ratio_sigma=0.3, upright_shift=0.0)
+                       upright_x_sigma=0.0, upright_swing_sigma=0.0, wide_ratio=0.5, wide_ratio_sigma=0.3,
+                       upright_shift=0.0)
     # upright and wide bodies' own terms apart (tested below)
     solid = Localizer(rect, solid=prior).locate(*args)
     return flat, solid, rect
@@ -128,8 +129,8 @@ def test_an_upright_bodys_azimuth_sigma_is_a_share_of_its_height_in_place_of_the
             rim_px: tuple[float, float] | None):
         return Localizer(rect, solid=prior).locate(*base, extra, extent, rim_px)
 
-    prior = SolidPrior(upright_sigma=0.0, upright_x_sigma=0.005)
-    bare = SolidPrior(rim_sigma_px=0.0, upright_sigma=0.0, upright_x_sigma=0.0)
+    prior = SolidPrior(upright_sigma=0.0, upright_x_sigma=0.005, upright_swing_sigma=0.0)
+    bare = SolidPrior(rim_sigma_px=0.0, upright_sigma=0.0, upright_x_sigma=0.0, upright_swing_sigma=0.0)
     person = loc(prior, (0.0, 0.0), (40.0, 200.0), sharp)
     same = loc(bare, (1.0, rim), (40.0, 200.0), (0.0, 0.0))
     assert np.allclose(person.cov_world, same.cov_world, rtol=1e-12, atol=0.0)
@@ -145,6 +146,24 @@ def test_an_upright_bodys_azimuth_sigma_is_a_share_of_its_height_in_place_of_the
     ball = loc(prior, (0.0, 0.0), (60.0, 60.0), None)
     plain = loc(SolidPrior(rim_sigma_px=0.0, upright_sigma=0.0), (rim, rim), (60.0, 60.0), None)
     assert np.allclose(ball.cov_world, plain.cov_world, rtol=1e-12, atol=0.0)
+
+
+def test_an_upright_bodys_azimuth_sigma_grows_with_the_share_of_its_swing_seen_across_the_image() -> None:
+    # h (a² + b² s²)^½ along x: s = 1 walking across the line of sight, 0 towards it, s² = 1/2 unknown
+    rect = Rectifier(default_rig())
+    prior = SolidPrior(upright_sigma=0.0, upright_x_sigma=0.003, upright_swing_sigma=0.006)
+    bare = SolidPrior(rim_sigma_px=0.0, upright_sigma=0.0, upright_x_sigma=0.0, upright_swing_sigma=0.0)
+    base = (np.array([380.0, 200.0]), 12.0, 0.05, 400, None)
+    h = 200.0
+    rim = (0.2, 0.2)
+
+    def loc(p: SolidPrior, extra_x: float, swing: float | None):  # type: ignore[no-untyped-def]
+        return Localizer(rect, solid=p).locate(*base, (extra_x, 0.0), (40.0, h), rim, True, None, swing)
+
+    for swing, s2 in ((1.0, 1.0), (0.0, 0.0), (0.5, 0.25), (None, 0.5)):
+        same = loc(bare, h * math.sqrt(0.003**2 + 0.006**2 * s2), 0.7)  # a flat target: swing means nothing
+        assert np.allclose(loc(prior, 0.0, swing).cov_world, same.cov_world, rtol=1e-12, atol=0.0), swing
+    assert loc(prior, 0.0, 1.0).sigma_theta > 1.5 * loc(prior, 0.0, 0.0).sigma_theta
 
 
 def test_a_wide_body_has_its_own_depth_prior() -> None:

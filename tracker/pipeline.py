@@ -23,6 +23,7 @@ from tracker.disparity_sigma import parts_sigma
 from tracker.egomotion import PoseCompensation
 from tracker.frames import StereoFrame
 from tracker.geometry import StereoRig
+from tracker.heading import HeadingHistory
 from tracker.localize import Localization, Localizer, SolidPrior
 from tracker.one_camera import OneCameraConfig
 from tracker.outline import OutlineConfig, warped_outline_sigma_px
@@ -113,6 +114,7 @@ class Pipeline:
         self.sigma_schedule = SigmaSchedule(sigma_budget_ms)
         self.heights = HeightHistory()
         self.extents = ExtentHistory()
+        self.headings = HeadingHistory()
         self.visibility = VisibilityConfig()
         self.outline = OutlineConfig()
         self.rim_contrast = RimContrastConfig()
@@ -180,9 +182,8 @@ class Pipeline:
         # from centroids and disparities alone (not their σ), as seen at home: the mount's turning taken out
         sigma_d, alone = np.array([b.disparity_sigma for b in blobs]), np.array([b.one_camera for b in blobs], bool)
         ids = self.tracker.update(frame.t, self.ego.to_home(obs, frame.gimbal), sigma_d, alone)
-        self.sigma_schedule.keep_only([tr.track_id for tr in self.tracker.tracks])
-        self.heights.keep_only([tr.track_id for tr in self.tracker.tracks])
-        self.extents.keep_only([tr.track_id for tr in self.tracker.tracks])
+        for kept in (self.sigma_schedule, self.heights, self.extents, self.headings):
+            kept.keep_only([tr.track_id for tr in self.tracker.tracks])
         t_ids = time.perf_counter()
         locs = [self._locate(frame, b, blobs, i, t0) for b, i in zip(blobs, ids, strict=True)]
         self._done = (frame, blobs, ids, hints, seek)  # for `between_frames`
@@ -229,9 +230,12 @@ class Pipeline:
         cy = float(np.hypot(terms.centroid_px[1], ky))
         in_frame = b.box[1] > 0 and b.box[3] < self.rig.left.size[1]  # its box reaches neither top nor bottom
         top = self._top_px(b) if terms.hidden_below and in_frame else None  # a body seen over what hides it
-        return self.localizer.locate(b.centroid_rect, b.disparity, max(b.disparity_sigma, terms.disparity_px),
-                                     b.area, frame.gimbal, (cx, float(np.hypot(cy, jump))), (float(w), float(h)),
-                                     terms.rim_px, in_frame, top)
+        swing = self.headings.swing_share(track_id, frame.index, self.localizer.origin)
+        loc = self.localizer.locate(b.centroid_rect, b.disparity, max(b.disparity_sigma, terms.disparity_px),
+                                    b.area, frame.gimbal, (cx, float(np.hypot(cy, jump))), (float(w), float(h)),
+                                    terms.rim_px, in_frame, top, swing)
+        self.headings.add(track_id, frame.index, frame.t, loc.world)
+        return loc
 
     def _top_px(self, b: Blob) -> float:
         """The rectified y (px) of a blob's outline's top: the upper edge of its highest row's pixels."""
@@ -384,7 +388,7 @@ class Pipeline:
 def with_gap_x(cx: float, gap_x: float, solid: SolidPrior | None, width_px: float, height_px: float) -> float:
     """The centroid's further 1-σ along x (px) with the hull gap's x term (tracker.segmentation) in quadrature,
     but for an upright body (SolidPrior.upright of its seen width and height, px): along x its notches are
-    the spaces between its swinging limbs, which the SolidPrior's upright_x_sigma describes."""
+    the spaces between its swinging limbs, which the SolidPrior's upright_x_var describes."""
     if solid is not None and solid.upright(width_px, height_px):
         return cx
     return float(np.hypot(cx, gap_x))

@@ -20,7 +20,7 @@ from the frames seen whole (98 % or more) of the six still `NAME:body` scenarios
 centroid against the true silhouette's was 0.02-0.21 px where the left and right sides' shares summed
 to under 0.2, 0.18-0.26 px at 0.2-0.4, 0.29-0.36 at 0.4-0.6, 0.35-0.53 at 0.6-0.8 (about 0.6 px times
 the sum: 1.7 / (2 √2) with the sum split evenly), and 0.57-1.18 above (the walkers' heavy tail, whose x
-has a prior of its own: tracker.localize.SolidPrior.upright_x_sigma). The fixed term it replaces, 0.5 /
+has a prior of its own: tracker.localize.SolidPrior.upright_x_var). The fixed term it replaces, 0.5 /
 √2 = 0.35 px, is this at a summed share of 0.6.
 
 On approach:body the sphere's azimuth and elevation NEES went 0.68 -> 0.91 and 0.17 -> 0.80 (within 1σ
