@@ -85,3 +85,70 @@ def test_a_lit_sphere_has_a_sharp_rim_and_a_walker_a_faint_one() -> None:
     assert max(_rim_terms("approach:body", 10)) < 0.1
     # walk:body: a textured, shaded walker, its rim fading into the ground and the wall at places
     assert max(_rim_terms("walk:body", 10)) > 0.15
+
+
+def _stereo_disc(left_grey: float, right_grey: float, d: int = 14, d_bg: int = 4):  # type: ignore[no-untyped-def]
+    """An ideal rig (600 px, 0.3 m, no distortion: rectified = raw) before a textured wall at disparity
+    d_bg; a disc of radius 20 px at disparity d, its left half at `left_grey`, its right half at
+    `right_grey`. The pair, the wall's correspondences over the disc's box, the disc's mask there, the box,
+    the rectifier."""
+    from tracker.bgdepth import CorrespondenceMap
+    from tracker.geometry import Camera, StereoRig
+
+    K = np.array([[600.0, 0.0, 320.0], [0.0, 600.0, 240.0], [0.0, 0.0, 1.0]])
+    half = np.array([0.15, 0.0, 0.0])
+    rect = Rectifier(StereoRig(Camera(K, np.zeros(5), (640, 480), np.eye(3), -half),
+                               Camera(K.copy(), np.zeros(5), (640, 480), np.eye(3), half)))
+    rng = np.random.default_rng(5)
+    t = cv2.GaussianBlur(rng.normal(0.0, 1.0, (480, 700)).astype(np.float32), (0, 0), 1.5)
+    wall = 110.0 + 12.0 * t / t.std()
+    yy, xx = np.mgrid[0:480, 0:640]
+
+    def view(dx_bg: int, cx: int) -> np.ndarray:
+        img = wall[yy, xx + dx_bg].copy()
+        on = np.hypot(xx - cx, yy - 240) <= 20
+        img[on & (xx < cx)] = left_grey
+        img[on & (xx >= cx)] = right_grey
+        return np.clip(img + rng.normal(0.0, 1.2, img.shape), 0, 255).astype(np.uint8)
+
+    left, right = view(0, 320), view(d_bg, 320 - d)
+    box = (290, 210, 351, 271)
+    x0, y0, x1, y1 = box
+    gx, gy = np.meshgrid(np.arange(x0, x1, dtype=np.float32), np.arange(y0, y1, dtype=np.float32))
+    shape = gx.shape
+    cm = CorrespondenceMap(gx - d_bg, gy, np.ones(shape, bool), np.full(shape, d_bg, np.float32),
+                           np.zeros(shape, np.uint8))
+    mask = np.hypot(gx - 320, gy - 240) <= 20
+    return left, right, cm, mask, box, rect
+
+
+def test_with_the_cameras_moving_each_side_of_the_rim_is_tested_against_the_background_behind_it() -> None:
+    # the left half at the wall's grey: faint, found by the right key where the left key lands on the disc
+    # itself (the right camera sees the disc where the left rim's background would be); the bright right
+    # half, tested by the left key (eq. 9), stands out
+    from tracker.rim_contrast import faint_shares_of, stereo_residual
+
+    left, right, cm, mask, box, rect = _stereo_disc(110.0, 200.0)
+    res, tested = stereo_residual(left, right, box, mask, 14.0, cm, rect)
+    rim = mask & (cv2.erode(mask.view(np.uint8), np.ones((3, 3), np.uint8), borderValue=0) == 0)
+    assert tested[rim].all() and not tested[25:36, 25:36].any()  # the middle: both keys land on the disc
+    l_share, r_share, top, bottom = faint_shares_of(mask, res, tested, CFG)
+    assert l_share > 0.8 and r_share < 0.02
+    assert 0.3 < top < 0.7 and 0.3 < bottom < 0.7  # their left halves
+    sx, sy = rim_sigma_px((l_share, r_share, top, bottom), CFG)
+    assert sx > 0.4 * CFG.side_px and sy < sx
+    # both halves bright: no side faint; the left key alone would have called the left half faint (the
+    # disc compared with itself, 10 px over)
+    left, right, cm, mask, box, rect = _stereo_disc(200.0, 200.0)
+    res, tested = stereo_residual(left, right, box, mask, 14.0, cm, rect)
+    assert max(faint_shares_of(mask, res, tested, CFG)) < 0.02
+    eq9 = np.abs(left[box[1]:box[3], box[0]:box[2]].astype(np.float32) - cm.warp(right).astype(np.float32))
+    assert faint_shares_of(mask, eq9, np.ones_like(mask), CFG)[0] > 0.8
+
+
+def test_with_the_background_as_deep_as_the_object_its_rim_cannot_be_told_and_counts_as_faint() -> None:
+    from tracker.rim_contrast import faint_shares_of, stereo_residual
+
+    left, right, cm, mask, box, rect = _stereo_disc(200.0, 200.0, d=14, d_bg=14)  # the ground at its feet
+    res, tested = stereo_residual(left, right, box, mask, 14.0, cm, rect)
+    assert tested.all() and min(faint_shares_of(mask, res, tested, CFG)) > 0.99

@@ -306,3 +306,12 @@ class Localizer:
         ratio, ratio_sigma = prior
         half, s_half = 0.5 * ratio * e, 0.5 * ratio_sigma * e
         return np.asarray(X_rig + half * u), np.asarray(cov_rig + s_half**2 * np.outer(u, u))
+
+
+def with_gap_x(cx: float, gap_x: float, solid: SolidPrior | None, width_px: float, height_px: float) -> float:
+    """The centroid's further 1-σ along x (px) with the hull gap's x term (tracker.segmentation) in quadrature,
+    but for an upright body (SolidPrior.upright of its seen width and height, px): along x its notches are
+    the spaces between its swinging limbs, which the SolidPrior's upright_x_var describes."""
+    if solid is not None and solid.upright(width_px, height_px):
+        return cx
+    return float(np.hypot(cx, gap_x))

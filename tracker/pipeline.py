@@ -24,12 +24,12 @@ from tracker.egomotion import PoseCompensation
 from tracker.frames import StereoFrame
 from tracker.geometry import StereoRig
 from tracker.heading import HeadingHistory
-from tracker.localize import Localization, Localizer, SolidPrior
+from tracker.localize import Localization, Localizer, SolidPrior, with_gap_x
 from tracker.one_camera import OneCameraConfig
 from tracker.outline import OutlineConfig, warped_outline_sigma_px
 from tracker.rectify import Rectifier
 from tracker.regions import hints_inside
-from tracker.rim_contrast import RimContrastConfig, faint_shares, rim_sigma_px
+from tracker.rim_contrast import RimContrastConfig, faint_shares, faint_shares_of, rim_sigma_px, stereo_residual
 from tracker.schedule import SigmaSchedule, SigmaTerms, VerifySchedule
 from tracker.segmentation import ExtentHistory, HeightHistory, outline_sigma_px
 from tracker.split import join_occluded, join_parts
@@ -250,11 +250,16 @@ class Pipeline:
                           whole)
 
     def _rim_px(self, frame: StereoFrame, b: Blob) -> tuple[float, float] | None:
-        """A solid body's outline's 1-σ (px, x and y) from its rim's contrast against the temporal model
-        (tracker.rim_contrast); None without a SolidPrior or a temporal model at this pose (cameras moving)."""
+        """A solid body's outline's 1-σ (px, x and y) from its rim's contrast against the temporal model or,
+        the cameras moving, the stereo pair's (tracker.rim_contrast); None without a SolidPrior, or for an
+        upright body while the cameras move (its outline warped: the SolidPrior's fixed rim term)."""
         model = self.subtractor.left_background(frame.gimbal)
-        if self.localizer.solid is None or model is None:
+        if self.localizer.solid is None or (model is None and self._seen_as(b)[0]):
             return None
+        if model is None:
+            cm = self.subtractor.correspondence(0, frame.gimbal, b.box)
+            res, tested = stereo_residual(frame.left, frame.right, b.box, b.mask, b.disparity, cm, self.rect)
+            return rim_sigma_px(faint_shares_of(b.mask, res, tested, self.rim_contrast), self.rim_contrast)
         gain = self.temporal.gain or b.gain
         shares = faint_shares(b.mask, b.box, frame.left, model[0], gain, self.rim_contrast)
         return rim_sigma_px(shares, self.rim_contrast)
@@ -383,15 +388,6 @@ class Pipeline:
             ly, lx = (y0 + s - 1) // s, (x0 + s - 1) // s
             low[ly:ly + sub.shape[0], lx:lx + sub.shape[1]] |= sub.astype(np.uint8)
         return low
-
-
-def with_gap_x(cx: float, gap_x: float, solid: SolidPrior | None, width_px: float, height_px: float) -> float:
-    """The centroid's further 1-σ along x (px) with the hull gap's x term (tracker.segmentation) in quadrature,
-    but for an upright body (SolidPrior.upright of its seen width and height, px): along x its notches are
-    the spaces between its swinging limbs, which the SolidPrior's upright_x_var describes."""
-    if solid is not None and solid.upright(width_px, height_px):
-        return cx
-    return float(np.hypot(cx, gap_x))
 
 
 def _explained(b: Blob, hints: F64, blobs: list[Blob]) -> bool:

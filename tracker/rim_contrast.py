@@ -25,8 +25,17 @@ has a prior of its own: tracker.localize.SolidPrior.upright_x_var). The fixed te
 
 On approach:body the sphere's azimuth and elevation NEES went 0.68 -> 0.91 and 0.17 -> 0.80 (within 1σ
 0.74 -> 0.70 and 0.95 -> 0.78); the other still scenes' figures moved by under 0.01 but for elevation
-NEES (walk 1.39 -> 1.35, illumination 1.45 -> 1.39, endless 2.00 -> 1.77). With the cameras moving
-there is no temporal model and the fixed term stays.
+NEES (walk 1.39 -> 1.35, illumination 1.45 -> 1.39, endless 2.00 -> 1.77).
+
+With the cameras moving there is no temporal model; a rim pixel's residual against its background then
+comes from the stereo pair (`stereo_residual`: eq. (9)'s left key where its test can be made, else the
+right key's), the same faint_level and side_px. On manoeuvre:body (a sphere tracked while the mount turns)
+its sides' faint shares were 0.07 (left), 0.15 (right), 0.01 (top), 0.49 (bottom, shaded), the two keys
+alike at the bottom (0.50 on the pixels the left key tested, 0.48 on the right key's): azimuth within 1σ 0.94 -> 0.67, NEES 0.30
+-> 1.17 against the fixed term's 0.35 px; elevation 0.66 -> 0.86 and 0.95 -> 0.75 (its bottom's share
+says 0.42 px where the centroid was off by 0.35 px rms along y; side_px is the still scenes'). An upright
+body keeps the fixed term while the cameras move (tracker.localize.SolidPrior: its x term counts the rim
+then, the outline being warped).
 """
 
 from __future__ import annotations
@@ -37,6 +46,8 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from tracker.bgdepth import CorrespondenceMap
+from tracker.rectify import Rectifier
 from tracker.visibility import sides
 
 BoolA = NDArray[np.bool_]
@@ -60,6 +71,14 @@ def faint_shares(mask: BoolA, box: tuple[int, int, int, int], image: NDArray[np.
     mask: (h, w) over box (x0, y0, x1, y1) of the left image `image` (H, W); background: the temporal model
     B (H, W) at gain 1. A side with no rim pixels has share 0."""
     x0, y0, x1, y1 = box
+    residual = np.abs(image[y0:y1, x0:x1].astype(np.float32) - np.float32(gain) * background[y0:y1, x0:x1])
+    return faint_shares_of(mask, residual, np.ones_like(mask), cfg)
+
+
+def faint_shares_of(mask: BoolA, residual: NDArray[np.float32], tested: BoolA, cfg: RimContrastConfig
+                    ) -> tuple[float, float, float, float]:
+    """faint_shares from a residual against the background (h, w) over the mask's box, counted over the rim
+    pixels where it could be `tested` (h, w) only; a side with none of those has share 0."""
     m8 = mask.view(np.uint8)
     rim = mask & (cv2.erode(m8, _RIM, borderType=cv2.BORDER_CONSTANT, borderValue=0) == 0)
     mom = cv2.moments(m8, binaryImage=True)
@@ -67,10 +86,44 @@ def faint_shares(mask: BoolA, box: tuple[int, int, int, int], image: NDArray[np.
         return 0.0, 0.0, 0.0, 0.0
     _, _, bw, bh = cv2.boundingRect(m8)
     centre, half = (mom["m10"] / mom["m00"], mom["m01"] / mom["m00"]), (max(bw / 2.0, 1.0), max(bh / 2.0, 1.0))
-    residual = np.abs(image[y0:y1, x0:x1].astype(np.float32) - np.float32(gain) * background[y0:y1, x0:x1])
     faint = residual < cfg.faint_level
     return tuple(float(np.count_nonzero(faint[ys, xs])) / xs.size if xs.size else 0.0  # type: ignore[return-value]
-                 for ys, xs in sides(rim, centre, half))
+                 for ys, xs in sides(rim & tested, centre, half))
+
+
+def stereo_residual(left: NDArray[np.uint8], right: NDArray[np.uint8], box: tuple[int, int, int, int],
+                    mask: BoolA, d: float, cm: CorrespondenceMap, rect: Rectifier
+                    ) -> tuple[NDArray[np.float32], BoolA]:
+    """While the cameras move (no temporal model): each pixel's residual against its background from the
+    stereo pair (h, w over the raw-left box of `mask`), and where one could be worked out. With the left
+    image as key, eq. (9)'s |Γ - Θ(d_bg)|; that test lands on the object itself where the pixel Δd =
+    d - d_bg px to the right along the rectified row is the object's (the right camera sees the object
+    where this pixel's background would be), so there, with the right image as key, |Θ(d) - Γ(x - Δd)|:
+    the object as the right camera sees it against the left image where that background is seen, unless
+    the pixel Δd to the left is the object's as well (tracker.rim, recover_rim_keys). Where the background
+    lies within a pixel of the object's disparity (the ground at a walker's feet) the two cannot be told
+    apart: residual 0, faint. d: the object's disparity (px); cm: the background's correspondences over
+    the box."""
+    x0, y0, x1, y1 = box
+    shift = np.float32(d) - cm.disparity
+    near = cm.valid & (shift < 1.0)
+    res_l = np.abs(left[y0:y1, x0:x1].astype(np.float32) - cm.warp(right).astype(np.float32))
+    bx, by = rect.left_along(box, -shift)
+    seen_bg = cv2.remap(left, bx, by, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    res_r = np.abs(rect.right_image_at(right, box, d).astype(np.float32) - seen_bg.astype(np.float32))
+    ok_l = cm.valid & ~near & ~_on_object(mask, box, *rect.left_along(box, shift))
+    ok_r = cm.valid & ~near & ~ok_l & ~_on_object(mask, box, bx, by)
+    residual = np.where(ok_l, res_l, np.where(ok_r, res_r, np.float32(0.0))).astype(np.float32)
+    return residual, np.asarray(ok_l | ok_r | near)
+
+
+def _on_object(mask: BoolA, box: tuple[int, int, int, int], x: NDArray[np.float32], y: NDArray[np.float32]
+               ) -> BoolA:
+    """Whether the raw-left positions x, y (h, w) fall on the mask (over box); outside the box: no."""
+    r, c = np.rint(y).astype(np.intp) - box[1], np.rint(x).astype(np.intp) - box[0]
+    h, w = mask.shape
+    inside = (r >= 0) & (r < h) & (c >= 0) & (c < w)
+    return np.asarray(inside & mask[np.clip(r, 0, h - 1), np.clip(c, 0, w - 1)])
 
 
 def rim_sigma_px(shares: tuple[float, float, float, float], cfg: RimContrastConfig) -> tuple[float, float]:
