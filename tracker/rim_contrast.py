@@ -31,8 +31,9 @@ With the cameras moving there is no temporal model; a rim pixel's residual again
 comes from the stereo pair (`stereo_residual`: eq. (9)'s left key where its test can be made, else the
 right key's), the same faint_level and side_px. On manoeuvre:body (a sphere tracked while the mount turns)
 its sides' faint shares were 0.07 (left), 0.15 (right), 0.01 (top), 0.49 (bottom, shaded), the two keys
-alike at the bottom (0.50 on the pixels the left key tested, 0.48 on the right key's): azimuth within 1σ 0.94 -> 0.67, NEES 0.30
--> 1.17 against the fixed term's 0.35 px; elevation 0.66 -> 0.86 and 0.95 -> 0.75 (its bottom's share
+alike at the bottom (0.50 on the pixels the left key tested, 0.48 on the right key's): azimuth within 1σ
+0.94 -> 0.67, NEES 0.30 -> 1.17 against the fixed term's 0.35 px; elevation 0.66 -> 0.86 and 0.95 ->
+0.75 (its bottom's share
 says 0.42 px where the centroid was off by 0.35 px rms along y; side_px is the still scenes'). An upright
 body keeps the fixed term while the cameras move (tracker.localize.SolidPrior: its x term counts the rim
 then, the outline being warped).
