@@ -135,14 +135,14 @@ def test_extent_history_bounds_a_cut_by_what_the_track_showed_whole() -> None:
         s = d / 15.0
         assert hist.cut_sigma_px(1, (30.0 * s, 30.0 * s), 900.0 * s * s, d, (0.0, 0.0)) == (0.0, 0.0)
     # beside a nearer object, seen whole still at 15 px: only the extents' rounding (1/√6 px rms), halved
-    sx, sy = hist.cut_sigma_px(1, (30.0, 30.0), 900.0, 15.0, kappa)
+    sx, sy = hist.cut_sigma_px(1, (30.0, 30.0), 900.0, 15.0, kappa, (False, False))
     assert sx == pytest.approx(0.5 / np.sqrt(6.0)) and sy == pytest.approx(0.5 / np.sqrt(6.0))
     # a strip 10 px wide hidden at one side: the centroid is 5 px off along x; y keeps kappa's 0, not cut
-    sx, sy = hist.cut_sigma_px(1, (20.0, 30.0), 600.0, 15.0, (8.0, 0.0))
+    sx, sy = hist.cut_sigma_px(1, (20.0, 30.0), 600.0, 15.0, (8.0, 0.0), (False, True))
     assert sx == pytest.approx(0.5 * np.sqrt(100.0 + 1.0 / 6.0)) and sy == 0.0
     # a rail 6 px high across it: the extents whole, 180 px² hidden inside the outline, up to its share of
     # the seen area times half the extent (3.75 px) along either axis
-    sx, sy = hist.cut_sigma_px(1, (30.0, 30.0), 720.0, 15.0, kappa)
+    sx, sy = hist.cut_sigma_px(1, (30.0, 30.0), 720.0, 15.0, kappa, (False, False))
     assert sy == pytest.approx(np.sqrt(1.0 / 24.0 + (15.0 * 180.0 / 720.0) ** 2)) and sx == pytest.approx(sy)
     # never more than kappa's term; cut frames add nothing to the history; another track has its own
     assert hist.cut_sigma_px(1, (2.0, 30.0), 60.0, 15.0, (0.8, 0.0))[0] == 0.8
@@ -159,18 +159,25 @@ def test_extent_history_counts_a_strip_the_outline_took_in_beyond_the_target() -
     # 12 px wider than it ever was, cut by the image's edge (not seen whole, not kept) yet no narrower than
     # the history, which bounded it to the rounding: the centroid lies up to 6 px off along x
     sx, sy = hist.cut_sigma_px(1, (42.0, 30.0), 1260.0, 15.0, (16.8, 12.0), (False, True))
-    assert sx == pytest.approx(0.5 * np.sqrt(144.0 + 1.0 / 6.0)) and sy == pytest.approx(0.5 / np.sqrt(6.0))
+    assert sx == pytest.approx(0.5 * np.sqrt(144.0 + 1.0 / 6.0)) and sy == 0.0  # its height seen whole
     # a pixel wider is the outline's rounding (within twice the scatter and the rounding): nothing taken in
-    sx, _ = hist.cut_sigma_px(1, (31.0, 30.0), 930.0, 15.0, (12.4, 12.0))
+    sx, _ = hist.cut_sigma_px(1, (31.0, 30.0), 930.0, 15.0, (12.4, 12.0), (False, False))
     assert sx == pytest.approx(0.5 / np.sqrt(6.0))
 
 
 def test_extent_history_widens_by_how_much_the_whole_target_varied() -> None:
+    # a robust scale (1.4826 x the median absolute deviation): one frame that took in a strip (a merge,
+    # kept as whole) does not widen the bound for the next 15 frames, as a standard deviation did
     hist = ExtentHistory()
     for w in (40.0, 50.0, 40.0, 50.0):  # a walker's width with its stride, at disparity 10 px
         hist.cut_sigma_px(1, (w, 100.0), 3000.0, 10.0, (0.0, 0.0))
-    sx, _ = hist.cut_sigma_px(1, (45.0, 100.0), 3000.0, 10.0, (18.0, 0.0))
-    assert sx == pytest.approx(0.5 * 5.0)  # median 45, standard deviation 5 (its rounding within that)
+    sx, _ = hist.cut_sigma_px(1, (45.0, 100.0), 3000.0, 10.0, (18.0, 0.0), (False, True))
+    assert sx == pytest.approx(0.5 * 1.4826 * 5.0)  # median 45, 1.4826 x its median deviation 5
+    board = ExtentHistory()
+    for h in (29.0,) * 6 + (35.0,) + (29.0,) * 2:  # occlusion:plate: one frame drawn 35 px high
+        board.cut_sigma_px(1, (29.0, h), 29.0 * h, 15.0, (0.0, 0.0))
+    _, sy = board.cut_sigma_px(1, (29.0, 29.0), 841.0, 15.0, (3.0, 11.0), (False, False))
+    assert sy == pytest.approx(0.5 / np.sqrt(6.0))  # the rounding alone (a standard deviation: 1.9 px)
 
 
 def test_extent_history_keeps_no_frame_whose_area_fell_short() -> None:
@@ -179,7 +186,7 @@ def test_extent_history_keeps_no_frame_whose_area_fell_short() -> None:
         hist.cut_sigma_px(1, (30.0, 30.0), 900.0, 15.0, (0.0, 0.0))
     for _ in range(20):  # a third of it behind a rail no side cut was found at: not taken as its size
         hist.cut_sigma_px(1, (30.0, 30.0), 600.0, 15.0, (0.0, 0.0))
-    _, sy = hist.cut_sigma_px(1, (30.0, 30.0), 600.0, 15.0, (12.0, 12.0))
+    _, sy = hist.cut_sigma_px(1, (30.0, 30.0), 600.0, 15.0, (12.0, 12.0), (False, False))
     assert sy == pytest.approx(np.sqrt(1.0 / 24.0 + (15.0 * 300.0 / 600.0) ** 2))
 
 
@@ -193,3 +200,6 @@ def test_extent_history_keeps_each_axis_seen_whole_apart() -> None:
     assert sx == 12.0 and sy == pytest.approx(0.5 / np.sqrt(6.0))  # no area history: nothing inside known
     sx, sy = hist.cut_sigma_px(1, (24.0, 21.0), 21.0 * 24.0, 15.0, (12.0, 11.8), (False, False))
     assert sy == pytest.approx(0.5 * np.sqrt(64.0 + 1.0 / 6.0))  # 8 px of its height hidden
+    # the post cuts a side only and moves the centroid along y across it (kappa's skew), the height seen
+    # whole: both its ends are seen, their rounding is the outline's edge term (not counted twice)
+    assert hist.cut_sigma_px(1, (24.0, 29.0), 29.0 * 24.0, 15.0, (12.0, 2.7), (False, True))[1] == 0.0
