@@ -203,3 +203,33 @@ def test_extent_history_keeps_each_axis_seen_whole_apart() -> None:
     # the post cuts a side only and moves the centroid along y across it (kappa's skew), the height seen
     # whole: both its ends are seen, their rounding is the outline's edge term (not counted twice)
     assert hist.cut_sigma_px(1, (24.0, 29.0), 29.0 * 24.0, 15.0, (12.0, 2.7), (False, True))[1] == 0.0
+
+
+def test_a_strip_at_a_round_sides_rounding_moves_its_centroid_less_than_a_rectangles() -> None:
+    # a strip δ wide at a side covers δ times the outline's outermost run there: half of δ for a board,
+    # about an eighth for a disc of radius 15 px (its outer two columns 6 px long on average)
+    import cv2
+
+    from tracker.segmentation import outer_runs
+
+    disc = np.zeros((33, 33), np.uint8)
+    cv2.circle(disc, (16, 16), 15, 1, -1)
+    board = np.ones((30, 20), bool)
+    assert outer_runs(board) == (30.0, 20.0)
+    ex, ey = outer_runs(disc.astype(bool))
+    assert ex == ey and 5.0 <= ex <= 9.0
+    assert outer_runs(disc.astype(bool), depth=1) == (1.0, 1.0)  # a rasterised disc's single-pixel tip
+    assert outer_runs(np.zeros((4, 4), bool)) == (0.0, 0.0)
+    area = float(disc.sum())
+    hist = ExtentHistory()
+    for w in (31.0, 32.0, 31.0, 32.0, 31.0):  # its width rounding to whole pixels as it moves
+        hist.cut_sigma_px(1, (w, 31.0), area, 15.0, (0.0, 0.0))
+    kappa = (12.4, 0.0)  # a crosser beside it: a side flagged as cut, the width no shorter than it was
+    rect_x, _ = hist.cut_sigma_px(1, (31.0, 31.0), area, 15.0, kappa, (False, True))
+    disc_x, _ = hist.cut_sigma_px(1, (31.0, 31.0), area, 15.0, kappa, (False, True), (ex, ey))
+    assert rect_x == pytest.approx(0.5 / np.sqrt(6.0))  # the rounding, at most half a pixel each end
+    assert disc_x == pytest.approx(rect_x * ex * 31.0 / area)
+    assert disc_x < 0.45 * rect_x
+    # a strip hidden for sure (6 px short) moves it by half of that whatever the shape: kept conservative
+    short_x, _ = hist.cut_sigma_px(1, (25.0, 31.0), area - 150.0, 15.0, kappa, (False, True), (ex, ey))
+    assert short_x > 3.0

@@ -31,7 +31,7 @@ from tracker.rectify import Rectifier
 from tracker.regions import hints_inside
 from tracker.rim_contrast import RimContrastConfig, faint_shares, faint_shares_of, rim_sigma_px, stereo_residual
 from tracker.schedule import SigmaSchedule, SigmaTerms, VerifySchedule
-from tracker.segmentation import ExtentHistory, HeightHistory, outline_sigma_px
+from tracker.segmentation import ExtentHistory, HeightHistory, outer_runs, outline_sigma_px
 from tracker.split import join_occluded, join_parts
 from tracker.temporal import TemporalConfig, TemporalDetector, without_duplicates
 from tracker.tracks import MultiTracker, TrackerConfig
@@ -225,7 +225,7 @@ class Pipeline:
         _, _, w, h = cv2.boundingRect(b.mask.view(np.uint8))
         jump = self.heights.sigma_px(track_id, frame.index, float(h), b.disparity)
         kx, ky = self.extents.cut_sigma_px(track_id, (float(w), float(h)), float(b.area), b.disparity, terms.cut_px,
-                                           terms.seen_whole)
+                                           terms.seen_whole, outer_runs(b.mask))
         cx = with_gap_x(float(np.hypot(terms.centroid_px[0], kx)), terms.gap_x_px, self.localizer.solid, w, h)
         cy = float(np.hypot(terms.centroid_px[1], ky))
         in_frame = b.box[1] > 0 and b.box[3] < self.rig.left.size[1]  # its box reaches neither top nor bottom
