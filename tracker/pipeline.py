@@ -326,7 +326,8 @@ class Pipeline:
         hidden_below, cut, whole = self._partly_seen(frame, b, others, upright)
         edge, (gap_x, gap_y) = outline_sigma_px(b.mask)
         px, py = 0.0, 0.0
-        terms = [edge, (0.0, 0.0 if wide else gap_y)]  # a car's cabin over its body: its shape
+        # a car's cabin over its body: its shape; a person's x: its SolidPrior term, fitted to errors holding it
+        terms = [(0.0 if upright else edge[0], edge[1]), (0.0, 0.0 if wide else gap_y)]
         if self.subtractor.left_background(frame.gimbal) is None:
             terms.append(warped_outline_sigma_px(b.mask, self.outline))
         for ox, oy in terms:
