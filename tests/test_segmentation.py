@@ -233,3 +233,18 @@ def test_a_strip_at_a_round_sides_rounding_moves_its_centroid_less_than_a_rectan
     # a strip hidden for sure (6 px short) moves it by half of that whatever the shape: kept conservative
     short_x, _ = hist.cut_sigma_px(1, (25.0, 31.0), area - 150.0, 15.0, kappa, (False, True), (ex, ey))
     assert short_x > 3.0
+
+
+def test_extent_history_remembers_a_track_seen_upright_whole() -> None:
+    # a walker 40 x 100 px seen whole, then only its head and shoulders over a car (not kept: cut)
+    hist = ExtentHistory(min_frames=3)
+    assert not hist.seen_upright(1, 1.5)
+    for _ in range(2):
+        hist.cut_sigma_px(1, (40.0, 100.0), 2500.0, 15.0, (0.0, 0.0))
+    assert not hist.seen_upright(1, 1.5)  # two frames: too few
+    hist.cut_sigma_px(1, (40.0, 100.0), 2500.0, 15.0, (0.0, 0.0))
+    hist.cut_sigma_px(1, (38.0, 30.0), 900.0, 15.0, (0.0, 12.0), (True, False))
+    assert hist.seen_upright(1, 1.5) and not hist.seen_upright(1, 3.0)
+    for _ in range(3):  # a ball
+        hist.cut_sigma_px(2, (30.0, 30.0), 700.0, 15.0, (0.0, 0.0))
+    assert not hist.seen_upright(2, 1.5)

@@ -277,6 +277,16 @@ def test_a_person_whose_lower_part_is_hidden_is_placed_from_its_top() -> None:
     # a ball's top says nothing of its centre that way
     ball = loc.locate(*args, (0.0, 0.0), (60.0, 60.0), None, True, 150.0)
     assert math.isclose(float(rect.rig_to_rect(ball.rig[None, :])[1][0]), 220.0, abs_tol=1e-6)
+    # but a person known as one (its track saw it whole), of whom only head and shoulders show, is: its
+    # centre from its top, its depth prior a person's
+    known = loc.locate(*args, (0.0, 0.0), (60.0, 60.0), None, True, 150.0, None, True)
+    z_c = 10.0 * (1.0 + 0.5 * prior.upright_ratio * 60.0 / rect.f)
+    y_known = 150.0 + prior.centre_below_top * prior.height_m * rect.f / z_c
+    assert math.isclose(float(rect.rig_to_rect(known.rig[None, :])[1][0]), y_known, abs_tol=1e-6)
+    assert prior.depth_ratio(60.0, 60.0, upright=True) == (prior.upright_ratio, prior.upright_ratio_sigma)
+    assert prior.depth_ratio(40.0, 100.0, upright=False) == (prior.ratio, prior.ratio_sigma)
+    not_known = loc.locate(*args, (0.0, 0.0), (60.0, 100.0), None, True, 150.0, None, False)
+    assert math.isclose(float(rect.rig_to_rect(not_known.rig[None, :])[1][0]), 220.0, abs_tol=1e-6)
 
 
 def test_a_person_hidden_below_gets_no_move_along_x_for_its_hidden_part(monkeypatch) -> None:  # type: ignore[no-untyped-def]

@@ -194,10 +194,10 @@ class SolidPrior:
         """Whether a target seen width_px wide and height_px high is a wide body (a vehicle side-on)."""
         return width_px > 0 and width_px >= self.wide_aspect * height_px
 
-    def depth_ratio(self, width_px: float, height_px: float) -> tuple[float, float]:
+    def depth_ratio(self, width_px: float, height_px: float, upright: bool | None = None) -> tuple[float, float]:
         """ρ and its 1-σ for a target seen width_px wide and height_px high: an upright body's, a wide
-        body's or the general one."""
-        if self.upright(width_px, height_px):
+        body's or the general one (upright: known to be a person or not; None: by the extent)."""
+        if self.upright(width_px, height_px) if upright is None else upright:
             return self.upright_ratio, self.upright_ratio_sigma
         if self.wide(width_px, height_px):
             return self.wide_ratio, self.wide_ratio_sigma
@@ -223,7 +223,8 @@ class Localizer:
     def locate(self, centroid_rect: F64, disparity: float, disparity_sigma: float, area: int,
                gimbal: GimbalState | None, extra_px: tuple[float, float] = (0.0, 0.0),
                extent_px: tuple[float, float] | None = None, rim_px: tuple[float, float] | None = None,
-               in_frame: bool = True, top_px: float | None = None, swing: float | None = None) -> Localization:
+               in_frame: bool = True, top_px: float | None = None, swing: float | None = None,
+               upright: bool | None = None) -> Localization:
         """extra_px: the centroid's further 1-σ (px) along x and y, where the target is seen only in part
         (tracker.visibility). extent_px: the target's seen width and height (px), for the SolidPrior.
         rim_px: the outline's 1-σ (px, x and y) from its rim's contrast (tracker.rim_contrast), in place of
@@ -232,12 +233,16 @@ class Localizer:
         upright body's shift, SolidPrior). top_px: the rectified y (px) of the outline's top where a nearer
         background hides the target's bottom and its top is seen: an upright body's centre is found from it
         (SolidPrior.height_m). swing: the share of an upright body's limb swing seen across the image
-        (tracker.heading; None: unknown, SolidPrior.upright_x_var)."""
+        (tracker.heading; None: unknown, SolidPrior.upright_x_var). upright: whether the target is an upright
+        body (a person) whatever its seen extent says (tracker.pipeline: a track seen upright whole, its
+        lower part now hidden); None: by its seen extent (SolidPrior.upright)."""
         x, y = float(centroid_rect[0]), float(centroid_rect[1])
         X_meas = self.rect.rect_to_rig(x, y, disparity)  # eq. (2)
         X_rig = X_meas
         from_top = None
-        if self.solid is not None and extent_px is not None and self.solid.upright(*extent_px):
+        if upright is None:
+            upright = self.solid is not None and extent_px is not None and self.solid.upright(*extent_px)
+        if self.solid is not None and extent_px is not None and upright:
             if top_px is not None:
                 from_top = self._below_top(top_px, disparity, extent_px[0])
                 y = from_top[0]
@@ -250,24 +255,22 @@ class Localizer:
         (s_cx, s_cy), s_dcal = cal.principal_px, cal.disparity_px * self.rect.f / float(self.rect.rig.left.K[0, 0])
         S = np.diag([s_c**2 + s_cx**2 + extra_px[0] ** 2, s_c**2 + s_cy**2 + extra_px[1] ** 2,
                      max(disparity_sigma, 0.02) ** 2 + PHASE_SIGMA_PX**2 + s_dcal**2])
-        person = False  # an upright body (SolidPrior.upright): its own x term and depth prior
-        if self.solid is not None and extent_px is not None:
+        if self.solid is not None and extent_px is not None:  # an upright body: its own x term and depth prior
             s_rim = self.solid.rim_sigma_px / np.sqrt(2.0)  # the outline's sides on a curved, shaded rim
             rx, ry = (s_rim, s_rim) if rim_px is None else rim_px
             w, h = extent_px
-            person = self.solid.upright(w, h)
-            upright = self.solid.upright_sigma * h if person else 0.0
-            if person:  # x: its limbs and, while the cameras move (no rim contrast), the rim too
+            s_up = self.solid.upright_sigma * h if upright else 0.0
+            if upright:  # x: its limbs and, while the cameras move (no rim contrast), the rim too
                 S[0, 0] += self.solid.upright_x_var(h, swing) + (rx**2 if rim_px is None else 0.0)
             else:  # x: the rim
                 S[0, 0] += rx**2
             if from_top is not None:  # y: the top's own edge and the height's share, not what is hidden
                 S[1, 1] = s_c**2 + s_cy**2 + self.solid.rim_sigma_px**2 + from_top[1] ** 2
             else:
-                S[1, 1] += ry**2 + max(upright**2 - extra_px[1] ** 2, 0.0)  # y: max(extra, upright)
+                S[1, 1] += ry**2 + max(s_up**2 - extra_px[1] ** 2, 0.0)  # y: max(extra, upright)
         cov_rig = J @ S @ J.T + cal.scale_rel**2 * np.outer(X_rig, X_rig)  # f·b off by ε: X -> (1 + ε) X
         if self.solid is not None and extent_px is not None:
-            prior = self.solid.depth_ratio(*extent_px)
+            prior = self.solid.depth_ratio(*extent_px, upright=upright)
             X_meas = self._behind_face(X_meas, cov_rig, min(extent_px), prior)[0]
             X_rig, cov_rig = self._behind_face(X_rig, cov_rig, min(extent_px), prior)
         g = gimbal or GimbalState()

@@ -231,9 +231,11 @@ class Pipeline:
         in_frame = b.box[1] > 0 and b.box[3] < self.rig.left.size[1]  # its box reaches neither top nor bottom
         top = self._top_px(b) if terms.hidden_below and in_frame else None  # a body seen over what hides it
         swing = self.headings.swing_share(track_id, frame.index, self.localizer.origin)
+        solid = self.localizer.solid  # a person whose top alone shows now: its track showed it whole
+        person = terms.hidden_below and solid is not None and self.extents.seen_upright(track_id, solid.upright_aspect)
         loc = self.localizer.locate(b.centroid_rect, b.disparity, max(b.disparity_sigma, terms.disparity_px),
                                     b.area, frame.gimbal, (cx, float(np.hypot(cy, jump))), (float(w), float(h)),
-                                    terms.rim_px, in_frame, top, swing)
+                                    terms.rim_px, in_frame, top, swing, True if person else None)
         self.headings.add(track_id, frame.index, frame.t, loc.world)
         return loc
 

@@ -291,6 +291,14 @@ class ExtentHistory:
             out.append(min(kappa, float(np.sqrt(var))))
         return out[0], out[1]
 
+    def seen_upright(self, track_id: int, aspect: float) -> bool:
+        """Whether the track, seen whole (its kept widths and heights), stood at least `aspect` times as high
+        as wide: a person, though only its top shows now."""
+        kept = self._kept.get(track_id)
+        if kept is None or min(len(kept[0]), len(kept[1])) < self.min_frames:
+            return False
+        return statistics.median(kept[1]) >= aspect * statistics.median(kept[0])
+
     def _slack(self, spread: float, axis: int) -> float:
         """How far a value may stray from the history's median and still be the whole target's: twice the
         history's scatter `spread`, and the rounding for an extent (axis 0, 1; not the area, axis 2). A frame
