@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import statistics
+
 import numpy as np
 import pytest
 
@@ -248,3 +250,16 @@ def test_extent_history_remembers_a_track_seen_upright_whole() -> None:
     for _ in range(3):  # a ball
         hist.cut_sigma_px(2, (30.0, 30.0), 700.0, 15.0, (0.0, 0.0))
     assert not hist.seen_upright(2, 1.5)
+
+
+def test_extent_history_measures_a_persons_stature_from_its_whole_frames() -> None:
+    # h / d times the baseline: a walker 100 px high at 15 px of disparity with b = 0.3 m is 2.0 m tall
+    hist = ExtentHistory(min_frames=3)
+    assert hist.stature_m(1, 0.3, 15.0) is None
+    for h, d in ((100.0, 15.0), (96.0, 14.4), (104.0, 15.6), (101.0, 15.0)):
+        hist.cut_sigma_px(1, (40.0, h), 2500.0, d, (0.0, 0.0))
+    hist.cut_sigma_px(1, (40.0, 30.0), 900.0, 15.0, (0.0, 12.0), (True, False))  # its top alone: not kept
+    height, sigma = hist.stature_m(1, 0.3, 15.0)  # type: ignore[misc]
+    assert height == pytest.approx(0.3 * statistics.median([100 / 15, 96 / 14.4, 104 / 15.6, 101 / 15]))
+    assert sigma >= 0.3 / (np.sqrt(6.0) * 15.0) - 1e-12  # at least the outline's rounding
+    assert hist.stature_m(1, 0.3, 0.0) is None

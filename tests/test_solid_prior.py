@@ -280,11 +280,18 @@ def test_a_person_whose_lower_part_is_hidden_is_placed_from_its_top() -> None:
     # but a person known as one (its track saw it whole), of whom only head and shoulders show, is: its
     # centre from its top, its depth prior a person's
     known = loc.locate(*args, (0.0, 0.0), (60.0, 60.0), None, True, 150.0, None, True)
-    z_c = 10.0 * (1.0 + 0.5 * prior.upright_ratio * 60.0 / rect.f)
     y_known = 150.0 + prior.centre_below_top * prior.height_m * rect.f / z_c
     assert math.isclose(float(rect.rig_to_rect(known.rig[None, :])[1][0]), y_known, abs_tol=1e-6)
     assert prior.depth_ratio(60.0, 60.0, upright=True) == (prior.upright_ratio, prior.upright_ratio_sigma)
     assert prior.depth_ratio(40.0, 100.0, upright=False) == (prior.ratio, prior.ratio_sigma)
+    # the stature its track measured (1.60 ± 0.01 m) weighs in with the prior's 1.70 ± 0.10 m, past the
+    # outline's own 2 cm (stature_sigma_m): inverse-variance weighted
+    measured = spread.locate(*args, (0.0, 0.0), (60.0, 100.0), None, True, 150.0, None, None, (1.60, 0.01))
+    w_m = 1.0 / (0.01**2 + prior.stature_sigma_m**2)
+    h_c = (1.70 / 0.10**2 + 1.60 * w_m) / (1.0 / 0.10**2 + w_m)
+    assert spread.solid is not None and (spread.solid.height_m, spread.solid.height_sigma_m) == (1.70, 0.10)
+    y_m = 150.0 + prior.centre_below_top * h_c * rect.f / z_c
+    assert math.isclose(float(rect.rig_to_rect(measured.rig[None, :])[1][0]), y_m, abs_tol=1e-6)
     not_known = loc.locate(*args, (0.0, 0.0), (60.0, 100.0), None, True, 150.0, None, False)
     assert math.isclose(float(rect.rig_to_rect(not_known.rig[None, :])[1][0]), 220.0, abs_tol=1e-6)
 

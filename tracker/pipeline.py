@@ -115,9 +115,7 @@ class Pipeline:
         self.heights = HeightHistory()
         self.extents = ExtentHistory()
         self.headings = HeadingHistory()
-        self.visibility = VisibilityConfig()
-        self.outline = OutlineConfig()
-        self.rim_contrast = RimContrastConfig()
+        self.visibility, self.outline, self.rim_contrast = VisibilityConfig(), OutlineConfig(), RimContrastConfig()
         self._last_gain = 1.0
         # the last frame, its objects, their track ids, its tracks' hints and all it was verified with
         self._done: tuple[StereoFrame, list[Blob], list[int], F64, F64] | None = None
@@ -235,7 +233,8 @@ class Pipeline:
         person = terms.hidden_below and solid is not None and self.extents.seen_upright(track_id, solid.upright_aspect)
         loc = self.localizer.locate(b.centroid_rect, b.disparity, max(b.disparity_sigma, terms.disparity_px),
                                     b.area, frame.gimbal, (cx, float(np.hypot(cy, jump))), (float(w), float(h)),
-                                    terms.rim_px, in_frame, top, swing, True if person else None)
+                                    terms.rim_px, in_frame, top, swing, True if person else None,
+                                    None if top is None else self.extents.stature_m(track_id, self.rect.b, b.disparity))
         self.headings.add(track_id, frame.index, frame.t, loc.world)
         return loc
 

@@ -50,6 +50,7 @@ together and go through tracker.schedule.SigmaSchedule; the third, a few µs, is
 
 from __future__ import annotations
 
+import math
 import statistics
 
 import cv2
@@ -298,6 +299,17 @@ class ExtentHistory:
         if kept is None or min(len(kept[0]), len(kept[1])) < self.min_frames:
             return False
         return statistics.median(kept[1]) >= aspect * statistics.median(kept[0])
+
+    def stature_m(self, track_id: int, baseline_m: float, disparity: float) -> tuple[float, float] | None:
+        """The height (m) of the track seen whole, b times the median of its kept h / d, and its 1-σ: b times
+        their robust scale, at least the outline's rounding at this disparity (1/√6 px); None with too few
+        heights kept. A person's stature from its own frames, for placing it from its top when its lower
+        part is hidden (tracker.localize.Localizer._below_top)."""
+        kept = self._kept.get(track_id)
+        st = None if kept is None or disparity <= 0 else self._stats(1.0, kept[1])
+        if st is None:
+            return None
+        return baseline_m * st[0], baseline_m * max(st[1], 1.0 / (math.sqrt(6.0) * disparity))
 
     def _slack(self, spread: float, axis: int) -> float:
         """How far a value may stray from the history's median and still be the whole target's: twice the
