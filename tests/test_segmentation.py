@@ -203,7 +203,9 @@ def test_extent_history_keeps_each_axis_seen_whole_apart() -> None:
     sx, sy = hist.cut_sigma_px(1, (24.0, 21.0), 21.0 * 24.0, 15.0, (12.0, 11.8), (False, False))
     assert sy == pytest.approx(0.5 * np.sqrt(64.0 + 1.0 / 6.0))  # 8 px of its height hidden
     # the post cuts a side only and moves the centroid along y across it (kappa's skew), the height seen
-    # whole: both its ends are seen, their rounding is the outline's edge term (not counted twice)
+    # whole: both its ends are seen, their rounding is the outline's edge term (not counted twice); with its
+    # heights all alike (no scatter) and no area history, nothing bounds it but that: 0 (occlusion:plate's
+    # board, 0.2 px so, was off by 0.01-0.03 px in elevation on such frames)
     assert hist.cut_sigma_px(1, (24.0, 29.0), 29.0 * 24.0, 15.0, (12.0, 2.7), (False, True))[1] == 0.0
 
 
@@ -261,5 +263,9 @@ def test_extent_history_measures_a_persons_stature_from_its_whole_frames() -> No
     hist.cut_sigma_px(1, (40.0, 30.0), 900.0, 15.0, (0.0, 12.0), (True, False))  # its top alone: not kept
     height, sigma = hist.stature_m(1, 0.3, 15.0)  # type: ignore[misc]
     assert height == pytest.approx(0.3 * statistics.median([100 / 15, 96 / 14.4, 104 / 15.6, 101 / 15]))
-    assert sigma >= 0.3 / (np.sqrt(6.0) * 15.0) - 1e-12  # at least the outline's rounding
+    # the four h / d values scatter by 1.4826 x their median deviation; at least the outline's rounding
+    hd = [100 / 15, 96 / 14.4, 104 / 15.6, 101 / 15]
+    mad = 1.4826 * statistics.median([abs(v - statistics.median(hd)) for v in hd])
+    assert sigma == pytest.approx(0.3 * max(mad, 1.0 / (np.sqrt(6.0) * 15.0)))
+    assert hist.stature_m(1, 0.3, 40.0)[1] == pytest.approx(0.3 * max(mad, 1.0 / (np.sqrt(6.0) * 40.0)))  # type: ignore[index]
     assert hist.stature_m(1, 0.3, 0.0) is None

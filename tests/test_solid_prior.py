@@ -161,7 +161,7 @@ def test_an_upright_bodys_azimuth_sigma_grows_with_the_share_of_its_swing_seen_a
         return Localizer(rect, solid=p).locate(*base, (extra_x, 0.0), (40.0, h), rim, True, None, swing)
 
     for swing, s2 in ((1.0, 1.0), (0.0, 0.0), (0.5, 0.25), (None, 0.5)):
-        same = loc(bare, h * math.sqrt(0.003**2 + 0.006**2 * s2), 0.7)  # a flat target: swing means nothing
+        same = loc(bare, h * math.sqrt(0.003**2 + 0.006**2 * s2), 0.7)  # no upright terms: swing means nothing
         assert np.allclose(loc(prior, 0.0, swing).cov_world, same.cov_world, rtol=1e-12, atol=0.0), swing
     assert loc(prior, 0.0, 1.0).sigma_theta > 1.5 * loc(prior, 0.0, 0.0).sigma_theta
 
@@ -292,6 +292,15 @@ def test_a_person_whose_lower_part_is_hidden_is_placed_from_its_top() -> None:
     assert spread.solid is not None and (spread.solid.height_m, spread.solid.height_sigma_m) == (1.70, 0.10)
     y_m = 150.0 + prior.centre_below_top * h_c * rect.f / z_c
     assert math.isclose(float(rect.rig_to_rect(measured.rig[None, :])[1][0]), y_m, abs_tol=1e-6)
+    assert measured.sigma_phi < wide.sigma_phi  # the measured stature narrows it
+    # its depth prior on its seen width, not on its smaller extent (a head and shoulders 60 x 40 px)
+    flat = Localizer(rect).locate(*args, (0.0, 0.0), (60.0, 40.0))
+    squat = Localizer(rect, solid=SolidPrior(upright_shift=0.0)).locate(*args, (0.0, 0.0), (60.0, 40.0), None,
+                                                                        True, None, None, True)
+    e = 60.0 * float(flat.rig[2]) / rect.f
+    c = rect.rig.left.c
+    moved = float(np.linalg.norm(squat.rig - c) - np.linalg.norm(flat.rig - c))
+    assert math.isclose(moved, 0.5 * prior.upright_ratio * e, rel_tol=1e-6)
     not_known = loc.locate(*args, (0.0, 0.0), (60.0, 100.0), None, True, 150.0, None, False)
     assert math.isclose(float(rect.rig_to_rect(not_known.rig[None, :])[1][0]), 220.0, abs_tol=1e-6)
 

@@ -344,6 +344,19 @@ class StereoSubtractor:
             cells.append(cv2.countNonZero(fg[y:y + bh, x:x + bw]))
         return tuple(out), tuple(cells)
 
+    def foreground_low(self, masks: list[tuple[Box, NDArray[np.bool_]]]) -> U8 | None:
+        """The verified objects' masks (box, mask over it) at the floor's low resolution (the stride's grid
+        points), for `update_floor`; None without any."""
+        if not masks:
+            return None
+        s = self.cfg.stride
+        low = np.zeros(self.low_shape, np.uint8)
+        for (x0, y0, _, _), mask in masks:
+            sub = mask[(-y0) % s::s, (-x0) % s::s]
+            ly, lx = (y0 + s - 1) // s, (x0 + s - 1) // s
+            low[ly:ly + sub.shape[0], lx:lx + sub.shape[1]] |= sub.astype(np.uint8)
+        return low
+
     def update_floor(self, foreground_low: U8 | None) -> None:
         """Let the floor rise by one grey level where the residual is above it: every frame for
         background pixels, every `_fg_every` frames under verified objects. Frozen while moving."""

@@ -264,7 +264,7 @@ class Localizer:
         (s_cx, s_cy), s_dcal = cal.principal_px, cal.disparity_px * self.rect.f / float(self.rect.rig.left.K[0, 0])
         S = np.diag([s_c**2 + s_cx**2 + extra_px[0] ** 2, s_c**2 + s_cy**2 + extra_px[1] ** 2,
                      max(disparity_sigma, 0.02) ** 2 + PHASE_SIGMA_PX**2 + s_dcal**2])
-        if self.solid is not None and extent_px is not None:  # an upright body: its own x term and depth prior
+        if self.solid is not None and extent_px is not None:  # a solid body: its rim; an upright one: its own x
             s_rim = self.solid.rim_sigma_px / np.sqrt(2.0)  # the outline's sides on a curved, shaded rim
             rx, ry = (s_rim, s_rim) if rim_px is None else rim_px
             w, h = extent_px
@@ -280,8 +280,14 @@ class Localizer:
         cov_rig = J @ S @ J.T + cal.scale_rel**2 * np.outer(X_rig, X_rig)  # f·b off by ε: X -> (1 + ε) X
         if self.solid is not None and extent_px is not None:
             prior = self.solid.depth_ratio(*extent_px, upright=upright)
-            X_meas = self._behind_face(X_meas, cov_rig, min(extent_px), prior)[0]
-            X_rig, cov_rig = self._behind_face(X_rig, cov_rig, min(extent_px), prior)
+            e_px = extent_px[0] if upright else min(extent_px)  # a person's prior is on its seen width
+            X_meas = self._behind_face(X_meas, cov_rig, e_px, prior)[0]
+            X_rig, cov_rig = self._behind_face(X_rig, cov_rig, e_px, prior)
+        return self._in_world(X_rig, cov_rig, X_meas, gimbal)
+
+    def _in_world(self, X_rig: F64, cov_rig: F64, X_meas: F64, gimbal: GimbalState | None) -> Localization:
+        """The Localization of a rig point (3,) with its covariance (3, 3) and its measured point: turned
+        by the gimbal into the world frame, eq. (1)'s r, θ, φ about the origin with their 1-σ."""
         g = gimbal or GimbalState()
         R_wr = gimbal_rotation(g.pan_deg, g.tilt_deg)
         X_w = R_wr @ X_rig
@@ -303,9 +309,13 @@ class Localizer:
         assert self.solid is not None
         s = self.solid
         H, s_h = s.height_m, s.height_sigma_m
-        if stature is not None and s_h > 0.0:  # the outline's height is not the body's past stature_sigma_m
-            w_p, w_m = 1.0 / s_h**2, 1.0 / (stature[1] ** 2 + s.stature_sigma_m**2)
-            H, s_h = (w_p * H + w_m * stature[0]) / (w_p + w_m), (w_p + w_m) ** -0.5
+        if stature is not None:
+            var_m = stature[1] ** 2 + s.stature_sigma_m**2  # the outline's height is not the body's past that
+            if var_m <= 0.0:  # measured exactly
+                H, s_h = stature[0], 0.0
+            elif s_h > 0.0:  # inverse-variance weighted with the prior (an exact prior stands)
+                w_p, w_m = 1.0 / s_h**2, 1.0 / var_m
+                H, s_h = (w_p * H + w_m * stature[0]) / (w_p + w_m), (w_p + w_m) ** -0.5
         f_over_z = disparity / self.rect.b / (1.0 + 0.5 * s.upright_ratio * width_px / self.rect.f)  # f / Z_c
         drop = s.centre_below_top * H * f_over_z
         sigma = f_over_z * float(np.hypot(s.centre_below_top * s_h, s.centre_below_top_sigma * H))

@@ -186,7 +186,7 @@ class Pipeline:
         locs = [self._locate(frame, b, blobs, i, t0) for b, i in zip(blobs, ids, strict=True)]
         self._done = (frame, blobs, ids, hints, seek)  # for `between_frames`
         t3 = time.perf_counter()
-        self.subtractor.update_floor(self._foreground_low(blobs))
+        self.subtractor.update_floor(self.subtractor.foreground_low([(b.box, b.mask) for b in blobs]))
         gain = self.temporal.gain or (max(blobs, key=lambda b: b.area).gain if blobs else self._last_gain)
         self._last_gain = gain
         self.subtractor.update_left_background(frame, [(b.box, b.mask) for b in blobs], gain)
@@ -219,7 +219,8 @@ class Pipeline:
     def _locate(self, frame: StereoFrame, b: Blob, blobs: list[Blob], track_id: int, start: float) -> Localization:
         """eq. (1-2) for a blob, with its 1-σ: the matcher's, the costlier terms (SigmaTerms) and, every
         frame, a piece lost or gained at the outline's top or bottom (tracker.segmentation.HeightHistory)."""
-        terms = self.sigma_schedule.terms(track_id, frame.index, start, lambda: self._sigma_terms(frame, b, blobs))
+        terms = self.sigma_schedule.terms(track_id, frame.index, start,
+                                          lambda: self._sigma_terms(frame, b, blobs, track_id))
         _, _, w, h = cv2.boundingRect(b.mask.view(np.uint8))
         jump = self.heights.sigma_px(track_id, frame.index, float(h), b.disparity)
         kx, ky = self.extents.cut_sigma_px(track_id, (float(w), float(h)), float(b.area), b.disparity, terms.cut_px,
@@ -229,11 +230,9 @@ class Pipeline:
         in_frame = b.box[1] > 0 and b.box[3] < self.rig.left.size[1]  # its box reaches neither top nor bottom
         top = self._top_px(b) if terms.hidden_below and in_frame else None  # a body seen over what hides it
         swing = self.headings.swing_share(track_id, frame.index, self.localizer.origin)
-        solid = self.localizer.solid  # a person whose top alone shows now: its track showed it whole
-        person = terms.hidden_below and solid is not None and self.extents.seen_upright(track_id, solid.upright_aspect)
         loc = self.localizer.locate(b.centroid_rect, b.disparity, max(b.disparity_sigma, terms.disparity_px),
                                     b.area, frame.gimbal, (cx, float(np.hypot(cy, jump))), (float(w), float(h)),
-                                    terms.rim_px, in_frame, top, swing, True if person else None,
+                                    terms.rim_px, in_frame, top, swing, True if terms.known_person else None,
                                     None if top is None else self.extents.stature_m(track_id, self.rect.b, b.disparity))
         self.headings.add(track_id, frame.index, frame.t, loc.world)
         return loc
@@ -245,17 +244,20 @@ class Pipeline:
         x, y = int(b.box[0] + cols[cols.size // 2]), int(b.box[1] + rows[0])
         return float(self.rect.rect_of_raw[0][y, x, 1]) - 0.5
 
-    def _sigma_terms(self, frame: StereoFrame, b: Blob, blobs: list[Blob]) -> SigmaTerms:
-        extra, gap_x, hidden_below, cut, whole = self._centroid_extra(frame, b, blobs)
-        return SigmaTerms(self._disparity_sigma(frame, b), extra, gap_x, self._rim_px(frame, b), hidden_below, cut,
-                          whole)
+    def _sigma_terms(self, frame: StereoFrame, b: Blob, blobs: list[Blob], track_id: int | None = None
+                     ) -> SigmaTerms:
+        """The blob's SigmaTerms; track_id: its track, whose history may know it as a person (None: not)."""
+        extra, gap_x, hidden_below, cut, whole, known = self._centroid_extra(frame, b, blobs, track_id)
+        return SigmaTerms(self._disparity_sigma(frame, b), extra, gap_x, self._rim_px(frame, b, known), hidden_below,
+                          cut, whole, known)
 
-    def _rim_px(self, frame: StereoFrame, b: Blob) -> tuple[float, float] | None:
+    def _rim_px(self, frame: StereoFrame, b: Blob, person: bool = False) -> tuple[float, float] | None:
         """A solid body's outline's 1-σ (px, x and y) from its rim's contrast against the temporal model or,
         the cameras moving, the stereo pair's (tracker.rim_contrast); None without a SolidPrior, or for an
-        upright body while the cameras move (its outline warped: the SolidPrior's fixed rim term)."""
+        upright body (or `person`, known as one) while the cameras move (its outline warped: the
+        SolidPrior's fixed rim term)."""
         model = self.subtractor.left_background(frame.gimbal)
-        if self.localizer.solid is None or (model is None and self._seen_as(b)[0]):
+        if self.localizer.solid is None or (model is None and (person or self._seen_as(b)[0])):
             return None
         if model is None:
             cm = self.subtractor.correspondence(0, frame.gimbal, b.box)
@@ -290,7 +292,7 @@ class Pipeline:
         if found:  # for the next frame only
             self._found = (frame.index + 1, self.ego.to_home(np.array(found, np.float64), frame.gimbal))
         for b, i in zip(blobs, ids, strict=True):
-            self.sigma_schedule.refresh(i, frame.index, deadline, partial(self._sigma_terms, frame, b, blobs))
+            self.sigma_schedule.refresh(i, frame.index, deadline, partial(self._sigma_terms, frame, b, blobs, i))
 
     def _with_found(self, hints: F64, frame: StereoFrame) -> F64:
         """The hints and the new objects found between the frame before and this one, at this frame's
@@ -310,8 +312,8 @@ class Pipeline:
         fits = self.verifier.part_fits(frame, b)
         return parts_sigma([d for d, _ in fits], b.disparity_sigma, [s for _, s in fits])
 
-    def _centroid_extra(self, frame: StereoFrame, b: Blob, blobs: list[Blob]
-                        ) -> tuple[tuple[float, float], float, bool, tuple[float, float], tuple[bool, bool]]:
+    def _centroid_extra(self, frame: StereoFrame, b: Blob, blobs: list[Blob], track_id: int | None = None
+                        ) -> tuple[tuple[float, float], float, bool, tuple[float, float], tuple[bool, bool], bool]:
         """The centroid's further 1-σ (px, x and y): where its outline is drawn by warping (no temporal
         model at this pose: the cameras move; tracker.outline), the outline's whole pixels and the parts of
         a body its segmentation may have missed in the notches of its outline (tracker.segmentation); in
@@ -321,10 +323,18 @@ class Pipeline:
         (SigmaTerms.cut_px and seen_whole, `_partly_seen`). A wide body (SolidPrior.wide: a car side-on)
         has no hull-gap term along y: the gap beside its cabin, over its body, is its shape, not pixels
         the segmentation missed (occlusion:body, frames 50-174: 2.3 to 3.0 px along y, medians, for
-        elevation errors of 0.32 to 1.56 px rms; 100 % of those frames within 1σ)."""
+        elevation errors of 0.32 to 1.56 px rms; 100 % of those frames within 1σ). Last: whether its track
+        knows it as a person its outline no longer shows as one (SigmaTerms.known_person). Its terms here
+        stay an outline's that is not upright: the upright x term scales with the seen height, 12 px of
+        head and shoulders on endless:body, and with these terms dropped for it azimuth NEES went 0.95 ->
+        3.02 there."""
         others = [e for o in blobs if o is not b for e in object_and_shadow(o.box, o.mask, o.disparity, o.bg_disparity)]
         upright, wide = self._seen_as(b)
+        solid = self.localizer.solid  # a person whose top alone may show now: its track showed it whole
+        seen = not upright and solid is not None and track_id is not None and \
+            self.extents.seen_upright(track_id, solid.upright_aspect)
         hidden_below, cut, whole = self._partly_seen(frame, b, others, upright)
+        known = seen and hidden_below
         edge, (gap_x, gap_y) = outline_sigma_px(b.mask)
         px, py = 0.0, 0.0
         # a car's cabin over its body: its shape; a person's x: its SolidPrior term, fitted to errors holding it
@@ -333,7 +343,7 @@ class Pipeline:
             terms.append(warped_outline_sigma_px(b.mask, self.outline))
         for ox, oy in terms:
             px, py = float(np.hypot(px, ox)), float(np.hypot(py, oy))
-        return (px, py), gap_x, hidden_below, cut, whole
+        return (px, py), gap_x, hidden_below, cut, whole, known
 
     def _partly_seen(self, frame: StereoFrame, b: Blob, others: list[tuple[Box, BoolA, float]], upright: bool
                      ) -> tuple[bool, tuple[float, float], tuple[bool, bool]]:
@@ -352,7 +362,7 @@ class Pipeline:
         mask, box = padded(b.mask, b.box, self.rig.left.size, left=2 + int(np.ceil(max(b.disparity, 0.0))),
                            below=2 + b.box[3] - b.box[1])
         cm = self.subtractor.correspondence(0, frame.gimbal, box)
-        disp, valid = with_objects(None if cm is None else cm.disparity, None if cm is None else cm.valid, box, others)
+        disp, valid = with_objects(cm.disparity, cm.valid, box, others)
         n = min(b.box[3] + 2, self.rig.left.size[1]) - box[1]  # cut_sides: the 2-px ring below, not the ground
         objects = painted(box, others)
         seen = cuts(mask[:n], (box[0], box[1], box[2], box[1] + n), self.rig.left.size, b.disparity,
@@ -378,18 +388,6 @@ class Pipeline:
             return False, False
         _, _, w, h = cv2.boundingRect(b.mask.view(np.uint8))
         return solid.upright(float(w), float(h)), solid.wide(float(w), float(h))
-
-    def _foreground_low(self, blobs: list[Blob]) -> NDArray[np.uint8] | None:
-        if not blobs:
-            return None
-        s = self.subtractor.cfg.stride
-        low = np.zeros(self.subtractor.low_shape, np.uint8)
-        for b in blobs:
-            x0, y0, x1, y1 = b.box
-            sub = b.mask[(-y0) % s::s, (-x0) % s::s]
-            ly, lx = (y0 + s - 1) // s, (x0 + s - 1) // s
-            low[ly:ly + sub.shape[0], lx:lx + sub.shape[1]] |= sub.astype(np.uint8)
-        return low
 
 
 def _explained(b: Blob, hints: F64, blobs: list[Blob]) -> bool:

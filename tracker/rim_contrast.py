@@ -33,10 +33,9 @@ right key's), the same faint_level and side_px. On manoeuvre:body (a sphere trac
 its sides' faint shares were 0.07 (left), 0.15 (right), 0.01 (top), 0.49 (bottom, shaded), the two keys
 alike at the bottom (0.50 on the pixels the left key tested, 0.48 on the right key's): azimuth within 1σ
 0.94 -> 0.67, NEES 0.30 -> 1.17 against the fixed term's 0.35 px; elevation 0.66 -> 0.86 and 0.95 ->
-0.75 (its bottom's share
-says 0.42 px where the centroid was off by 0.35 px rms along y; side_px is the still scenes'). An upright
-body keeps the fixed term while the cameras move (tracker.localize.SolidPrior: its x term counts the rim
-then, the outline being warped).
+0.75 (its bottom's share says 0.42 px where the centroid was off by 0.35 px rms along y; side_px is the
+still scenes'). An upright body keeps the fixed term while the cameras move (tracker.localize.SolidPrior:
+its x term counts the rim then, the outline being warped).
 """
 
 from __future__ import annotations
@@ -101,21 +100,31 @@ def stereo_residual(left: NDArray[np.uint8], right: NDArray[np.uint8], box: tupl
     d - d_bg px to the right along the rectified row is the object's (the right camera sees the object
     where this pixel's background would be), so there, with the right image as key, |Θ(d) - Γ(x - Δd)|:
     the object as the right camera sees it against the left image where that background is seen, unless
-    the pixel Δd to the left is the object's as well (tracker.rim, recover_rim_keys). Where the background
-    lies within a pixel of the object's disparity (the ground at a walker's feet) the two cannot be told
-    apart: residual 0, faint. d: the object's disparity (px); cm: the background's correspondences over
-    the box."""
+    the pixel Δd to the left is the object's as well (tracker.rim, recover_rim_keys), or either picture
+    lies outside its image. Where the background lies within a pixel of the object's disparity (the
+    ground at a walker's feet) the two cannot be told apart: residual 0, faint. Where it lies a pixel or
+    more before the object (a background map out of date) neither test is made. d: the object's disparity
+    (px); cm: the background's correspondences over the box."""
     x0, y0, x1, y1 = box
     shift = np.float32(d) - cm.disparity
-    near = cm.valid & (shift < 1.0)
+    near = cm.valid & (np.abs(shift) < 1.0)
+    behind = cm.valid & (shift >= 1.0)
     res_l = np.abs(left[y0:y1, x0:x1].astype(np.float32) - cm.warp(right).astype(np.float32))
     bx, by = rect.left_along(box, -shift)
+    ur, vr = rect.right_at(box, d)
     seen_bg = cv2.remap(left, bx, by, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-    res_r = np.abs(rect.right_image_at(right, box, d).astype(np.float32) - seen_bg.astype(np.float32))
-    ok_l = cm.valid & ~near & ~_on_object(mask, box, *rect.left_along(box, shift))
-    ok_r = cm.valid & ~near & ~ok_l & ~_on_object(mask, box, bx, by)
+    seen_obj = cv2.remap(right, ur, vr, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    res_r = np.abs(seen_obj.astype(np.float32) - seen_bg.astype(np.float32))
+    ok_l = behind & ~_on_object(mask, box, *rect.left_along(box, shift))
+    ok_r = behind & ~ok_l & ~_on_object(mask, box, bx, by) & _inside(bx, by, left) & _inside(ur, vr, right)
     residual = np.where(ok_l, res_l, np.where(ok_r, res_r, np.float32(0.0))).astype(np.float32)
     return residual, np.asarray(ok_l | ok_r | near)
+
+
+def _inside(x: NDArray[np.float32], y: NDArray[np.float32], image: NDArray[np.uint8]) -> BoolA:
+    """Whether positions x, y (h, w) lie within the image (bilinear samples of its own pixels)."""
+    h, w = image.shape[:2]
+    return np.asarray((x >= 0) & (x <= w - 1) & (y >= 0) & (y <= h - 1))
 
 
 def _on_object(mask: BoolA, box: tuple[int, int, int, int], x: NDArray[np.float32], y: NDArray[np.float32]

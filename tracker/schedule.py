@@ -207,7 +207,9 @@ class SigmaTerms:
     and the rows lost against the ground, in quadrature), apart from centroid_px: the track's extents seen
     whole bound it at the frame the terms are used for (tracker.segmentation.ExtentHistory); seen_whole,
     whether its width and its height were seen whole (no side along that axis cut, nothing lost against
-    the ground along y)."""
+    the ground along y); known_person, a track seen whole as an upright body whose lower part a nearer
+    background hides now (tracker.segmentation.ExtentHistory.seen_upright): a person whatever its top's
+    outline says (tracker.localize.Localizer.locate's upright)."""
 
     disparity_px: float
     centroid_px: tuple[float, float]
@@ -216,6 +218,7 @@ class SigmaTerms:
     hidden_below: bool = False
     cut_px: tuple[float, float] = (0.0, 0.0)
     seen_whole: tuple[bool, bool] = (True, True)
+    known_person: bool = False
 
 
 class SigmaSchedule:

@@ -257,8 +257,10 @@ class ExtentHistory:
         """The cut sides' 1-σ (px, x and y) for a track's outline of extent_px (width, height, px) and
         area_px (px²) at disparity d (px), given kappa's (cut_px; (0, 0): seen whole) and whether its
         width and height were seen whole (kept for later frames). edge_px: the outline's outermost runs
-        (`outer_runs`), for how far a strip of a pixel or less at a side moves the centroid (None: a
-        rectangle's, half its width)."""
+        (`outer_runs`), for how far the history's scatter moves the centroid (None: a rectangle's, half of
+        it): what varies from frame to frame is the outline's outermost part (a board's rounded side, a
+        walker's limb reaching out), whose area is the scatter times that run. A strip hidden for sure
+        (`off`) counts at half its width whatever the shape."""
         if disparity <= 0 or area_px <= 0:
             return cut_px
         kept = self._kept.setdefault(track_id, ([], [], []))
