@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 from sim_helpers import run_frames
 
 from tracker import pipeline
@@ -161,7 +162,7 @@ def test_an_upright_bodys_azimuth_sigma_grows_with_the_share_of_its_swing_seen_a
         return Localizer(rect, solid=p).locate(*base, (extra_x, 0.0), (40.0, h), rim, True, None, swing)
 
     for swing, s2 in ((1.0, 1.0), (0.0, 0.0), (0.5, 0.25), (None, 0.5)):
-        same = loc(bare, h * math.sqrt(0.003**2 + 0.006**2 * s2), 0.7)  # no upright terms: swing means nothing
+        same = loc(bare, h * math.sqrt(0.003**2 + 0.006**2 * s2), swing)  # its x terms as the extra term's
         assert np.allclose(loc(prior, 0.0, swing).cov_world, same.cov_world, rtol=1e-12, atol=0.0), swing
     assert loc(prior, 0.0, 1.0).sigma_theta > 1.5 * loc(prior, 0.0, 0.0).sigma_theta
 
@@ -352,3 +353,24 @@ def test_a_round_body_is_placed_at_the_centre_of_a_sphere_behind_its_seen_face()
     assert math.isclose(0.5 * ratio * 2.0 * R, face_before_centre, rel_tol=1e-3)
     # a cylinder seen side-on (πR/4 before its axis) lies within the 1-σ
     assert abs(np.pi / 4.0 - ratio) <= sigma
+
+
+def test_an_upright_bodys_centre_lies_higher_above_its_silhouette_seen_from_the_side() -> None:
+    # walking across the line of sight (s = 1) its striding legs spread its silhouette low: the volume centre
+    # lies upright_shift_side of the seen height above the centroid; seen from the front (s = 0)
+    # upright_shift_front; unknown heading: upright_shift
+    prior = SolidPrior()
+    assert prior.shift_up(None) == prior.upright_shift
+    assert prior.shift_up(0.0) == prior.upright_shift_front < prior.upright_shift < prior.shift_up(1.0)
+    assert prior.shift_up(1.0) == pytest.approx(prior.upright_shift_side)
+    assert prior.shift_up(0.5) == pytest.approx(prior.upright_shift_front
+                                                + 0.25 * (prior.upright_shift_side - prior.upright_shift_front))
+    rect = Rectifier(default_rig())
+    args = (np.array([380.0, 200.0]), 12.0, 0.05, 4000, None, (0.0, 0.0), (40.0, 200.0), None, True, None)
+    ys = []
+    for swing in (0.0, None, 1.0):
+        loc = Localizer(rect, solid=SolidPrior(upright_ratio=0.0)).locate(*args, swing)
+        ys.append(float(rect.rig_to_rect(loc.rig[None, :])[1][0]))
+    assert ys[0] == pytest.approx(200.0 - prior.upright_shift_front * 200.0, abs=1e-6)
+    assert ys[2] == pytest.approx(200.0 - prior.upright_shift_side * 200.0, abs=1e-6)
+    assert ys[2] < ys[1] < ys[0]

@@ -337,8 +337,9 @@ class Pipeline:
         known = seen and hidden_below
         edge, (gap_x, gap_y) = outline_sigma_px(b.mask)
         px, py = 0.0, 0.0
-        # a car's cabin over its body: its shape; a person's x: its SolidPrior term, fitted to errors holding it
-        terms = [(0.0 if upright else edge[0], edge[1]), (0.0, 0.0 if wide else gap_y)]
+        # a car's cabin over its body, the space between a person's legs: their shape; a person's x: its
+        # SolidPrior term, fitted to errors that hold the edge term
+        terms = [(0.0 if upright else edge[0], edge[1]), (0.0, 0.0 if wide or upright else gap_y)]
         if self.subtractor.left_background(frame.gimbal) is None:
             terms.append(warped_outline_sigma_px(b.mask, self.outline))
         for ox, oy in terms:
