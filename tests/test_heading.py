@@ -63,3 +63,19 @@ def test_no_share_without_enough_recent_positions() -> None:
 def test_bad_settings_are_refused() -> None:
     with pytest.raises(ValueError, match="min_frames"):
         HeadingHistory(frames=3, min_frames=5)
+
+
+def test_the_gait_share_is_the_speed_beyond_the_positions_scatter() -> None:
+    # a walker standing at 10 m whose range scatters by 0.1 m: its fitted speed (about 0.2 m/s along the
+    # line of sight) is what that scatter explains, so it hardly walks; at 1.4 m/s it walks fully; at
+    # 0.25 m/s, half of the walking speed v_0
+    still, walking, slow = HeadingHistory(), HeadingHistory(), HeadingHistory()
+    _walk(still, np.array([0.5, 1.0, 10.0]), np.zeros(3), 15, noise_m=0.1)
+    _walk(walking, np.array([0.0, 1.0, 12.0]), np.array([0.0, 0.0, -1.4]), 15, noise_m=0.1)
+    _walk(slow, np.array([0.0, 1.0, 10.0]), np.array([0.25, 0.0, 0.0]), 15)
+    fit = still._velocity(1, 15)
+    assert fit is not None and float(np.hypot(*fit[0])) > 0.0  # the raw slope says it moves a little
+    assert still.gait_share(1, 15) < min(0.1, float(np.hypot(*fit[0])) / 0.5)
+    assert walking.gait_share(1, 15) == 1.0
+    assert slow.gait_share(1, 15) == pytest.approx(0.5, abs=0.01)
+    assert HeadingHistory().gait_share(1, 0) is None

@@ -165,6 +165,11 @@ def test_an_upright_bodys_azimuth_sigma_grows_with_the_share_of_its_swing_seen_a
         same = loc(bare, h * math.sqrt(0.003**2 + 0.006**2 * s2), swing)  # its x terms as the extra term's
         assert np.allclose(loc(prior, 0.0, swing).cov_world, same.cov_world, rtol=1e-12, atol=0.0), swing
     assert loc(prior, 0.0, 1.0).sigma_theta > 1.5 * loc(prior, 0.0, 0.0).sigma_theta
+    # standing still (gait m = 0) only upright_still_sigma remains; walking fully (m = 1) as above
+    assert prior.upright_x_var(h, 0.0, 0.0) == pytest.approx((h * prior.upright_still_sigma) ** 2)
+    assert prior.upright_x_var(h, 0.5, 1.0) == pytest.approx(prior.upright_x_var(h, 0.5))
+    a0, a = prior.upright_still_sigma, prior.upright_x_sigma
+    assert prior.upright_x_var(h, 0.0, 0.5) == pytest.approx(h * h * (a0**2 + 0.25 * (a**2 - a0**2)))
 
 
 def test_a_wide_body_has_its_own_depth_prior() -> None:

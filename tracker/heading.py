@@ -12,8 +12,9 @@ with v the body's horizontal velocity (m/s, world x and z; y is down), v_⊥ its
 sight from the rig's origin, and v_0 a walking speed (m/s) below which the limbs are taken to swing less
 in proportion (a person standing has v ≈ 0 and s ≈ 0). v is the least-squares slope of the track's last
 `frames` world positions against time; its noise lies mostly along the line of sight (the range's), which
-only moves s towards 0 where the body hardly moves across it. tracker.localize.SolidPrior turns s into the
-upright body's centroid 1-σ along x.
+only moves s towards 0 where the body hardly moves across it. `gait_share`, m = min(|v| / v_0, 1) with |v|²
+less the fit's own variance, says how fully it walks (a standing body's range noise would have it walk).
+tracker.localize.SolidPrior turns s and m into the upright body's centroid 1-σ along x.
 
 Measured on the simulator's walkers (frames not cut by the image's edge or by another object), the azimuth
 error against the volume centre in units of the seen height h, Gaussian-equivalent (median |error| / 0.674),
@@ -50,23 +51,47 @@ class HeadingHistory:
     def swing_share(self, track_id: int, index: int, origin: F64) -> float | None:
         """s (see the module's docstring) from the positions kept before frame `index`; None with fewer than
         min_frames of them or the last more than max_gap frames old."""
-        last, seen = self._kept.get(track_id, (index, []))
-        if len(seen) < self.min_frames or index - last > self.max_gap:
+        fit = self._velocity(track_id, index)
+        if fit is None:
             return None
-        t = np.array([s[0] for s in seen])
-        X = np.array([s[1] for s in seen])  # (n, 3)
-        tc = t - t.mean()
-        if float(tc @ tc) <= 0.0:
-            return None
-        v = (tc @ (X - X.mean(axis=0))) / float(tc @ tc)  # m/s, (3,): the least-squares slope
-        v_h = np.array([v[0], v[2]])  # horizontal: world y is down
-        los = X[-1] - origin
+        v_h, last, _ = fit
+        los = last - origin
         u = np.array([los[0], los[2]])
         n = float(np.hypot(*u))
         if n <= 0.0:
             return None
         across = abs(float(v_h[0] * u[1] - v_h[1] * u[0])) / n  # |v_⊥| (m/s)
         return min(across / max(float(np.hypot(*v_h)), self.walk_mps), 1.0)
+
+    def gait_share(self, track_id: int, index: int) -> float | None:
+        """m = min(|v| / v_0, 1): how fully the body walks (0 standing still, 1 at a walking speed or
+        faster), from the same fit as swing_share, |v|² less the fit's own variance (the positions' scatter
+        about the line: a standing body's range noise of 0.1 m at 10 m made it walk at 0.2 m/s); None where
+        that fit has none."""
+        fit = self._velocity(track_id, index)
+        if fit is None:
+            return None
+        v_h, _, var_v = fit
+        return min(float(np.sqrt(max(float(v_h @ v_h) - var_v, 0.0))) / self.walk_mps, 1.0)
+
+    def _velocity(self, track_id: int, index: int) -> tuple[F64, F64, float] | None:
+        """The horizontal velocity (m/s, world x and z: the least-squares slope of the kept positions against
+        time), the last position (3,) and the slope's variance summed over x and z ((m/s)²: the residuals'
+        variance over Σ (t - t̄)²), from the positions kept before frame `index`."""
+        last, seen = self._kept.get(track_id, (index, []))
+        if len(seen) < self.min_frames or index - last > self.max_gap:
+            return None
+        t = np.array([s[0] for s in seen])
+        X = np.array([s[1] for s in seen])[:, [0, 2]]  # (n, 2) horizontal: world y is down
+        tc = t - t.mean()
+        stt = float(tc @ tc)
+        if stt <= 0.0:
+            return None
+        Xc = X - X.mean(axis=0)
+        v = (tc @ Xc) / stt  # m/s, (2,)
+        resid = Xc - np.outer(tc, v)
+        var_v = float(np.sum(resid * resid)) / max(len(t) - 2, 1) / stt
+        return v, np.asarray(seen[-1][1]), var_v
 
     def keep_only(self, track_ids: list[int]) -> None:
         """Forget the positions of tracks not in track_ids (ended)."""

@@ -140,7 +140,11 @@ class SolidPrior:
       place of the rim's term, the hull gap's and the outline's edge term along x (tracker.pipeline: the
       errors it was fitted to hold them all; over 2,085 upright frames with no cut, a Student-t fit of h
       (a² + b² s²)^½ with the edge term added in quadrature had a log-likelihood 87 lower than without it:
-      endless:body azimuth within 1σ 0.794 -> 0.779, NEES 0.750 -> 0.849). Its arms and legs swing across the
+      endless:body azimuth within 1σ 0.794 -> 0.779, NEES 0.750 -> 0.849). Standing still it swings
+      nothing: with tracker.heading's gait share m (0 standing, 1 walking), h² (a0² + (a² - a0²) m² + b²
+      s²), a0 = `upright_still_sigma` 0.13 % (endless:body's 328 frames of walkers standing, seen whole:
+      0.132 % of h, Gaussian-equivalent; it counts only where the body is not placed from its top). Its
+      arms and legs swing across the
       outline, so the notches of its outline are the spaces between its limbs, not parts the segmentation
       missed, and the volume centre lies off the silhouette's centroid by an amount that scales with the
       body's size: the azimuth errors against the volume centre are 0.47 to 0.52 % of the seen height rms
@@ -195,6 +199,7 @@ class SolidPrior:
     upright_ratio_sigma: float = 0.15
     upright_x_sigma: float = 0.0028
     upright_swing_sigma: float = 0.0058
+    upright_still_sigma: float = 0.0013
     wide_aspect: float = 2.0
     wide_ratio: float = 1.2
     wide_ratio_sigma: float = 0.25
@@ -211,12 +216,15 @@ class SolidPrior:
             return self.upright_shift
         return self.upright_shift_front + (self.upright_shift_side - self.upright_shift_front) * swing * swing
 
-    def upright_x_var(self, height_px: float, swing: float | None) -> float:
-        """An upright body's centroid variance along x (px²): (h (a² + b² s²)^½)², a = upright_x_sigma,
-        b = upright_swing_sigma, s the share of its limbs' swing seen across the image (tracker.heading);
-        s² = 1/2, a heading at random, where unknown."""
+    def upright_x_var(self, height_px: float, swing: float | None, gait: float | None = None) -> float:
+        """An upright body's centroid variance along x (px²): h² (a0² + (a² - a0²) m² + b² s²), a =
+        upright_x_sigma, a0 = upright_still_sigma (standing still), b = upright_swing_sigma, s the share of
+        its limbs' swing seen across the image, m how fully it walks (tracker.heading); s² = 1/2 (a heading
+        at random) and m = 1 where unknown."""
         s2 = 0.5 if swing is None else swing * swing
-        return height_px * height_px * (self.upright_x_sigma**2 + self.upright_swing_sigma**2 * s2)
+        m2 = 1.0 if gait is None else gait * gait
+        a0, a = self.upright_still_sigma, self.upright_x_sigma
+        return height_px * height_px * (a0**2 + (a**2 - a0**2) * m2 + self.upright_swing_sigma**2 * s2)
 
     def wide(self, width_px: float, height_px: float) -> bool:
         """Whether a target seen width_px wide and height_px high is a wide body (a vehicle side-on)."""
@@ -252,7 +260,8 @@ class Localizer:
                gimbal: GimbalState | None, extra_px: tuple[float, float] = (0.0, 0.0),
                extent_px: tuple[float, float] | None = None, rim_px: tuple[float, float] | None = None,
                in_frame: bool = True, top_px: float | None = None, swing: float | None = None,
-               upright: bool | None = None, stature: tuple[float, float] | None = None) -> Localization:
+               upright: bool | None = None, stature: tuple[float, float] | None = None,
+               gait: float | None = None) -> Localization:
         """extra_px: the centroid's further 1-σ (px) along x and y, where the target is seen only in part
         (tracker.visibility). extent_px: the target's seen width and height (px), for the SolidPrior.
         rim_px: the outline's 1-σ (px, x and y) from its rim's contrast (tracker.rim_contrast), in place of
@@ -265,7 +274,8 @@ class Localizer:
         body (a person) whatever its seen extent says (tracker.pipeline: a track seen upright whole, its
         lower part now hidden); None: by its seen extent (SolidPrior.upright). stature: the height (m) and its
         1-σ that the target's track measured, for an upright body placed from its top (combined with the
-        SolidPrior's height_m ± height_sigma_m); None: the prior's alone."""
+        SolidPrior's height_m ± height_sigma_m); None: the prior's alone. gait: how fully an upright body
+        walks (tracker.heading; None: unknown, taken as walking)."""
         x, y = float(centroid_rect[0]), float(centroid_rect[1])
         X_meas = self.rect.rect_to_rig(x, y, disparity)  # eq. (2)
         X_rig = X_meas
@@ -291,7 +301,8 @@ class Localizer:
             w, h = extent_px
             s_up = self.solid.upright_sigma * h if upright else 0.0
             if upright:  # x: its limbs and, while the cameras move (no rim contrast), the rim too
-                S[0, 0] += self.solid.upright_x_var(h, swing) + (rx**2 if rim_px is None else 0.0)
+                whole = gait if from_top is None else None  # the still share: of standing bodies seen whole
+                S[0, 0] += self.solid.upright_x_var(h, swing, whole) + (rx**2 if rim_px is None else 0.0)
             else:  # x: the rim
                 S[0, 0] += rx**2
             if from_top is not None:  # y: the top's own edge and the height's share, not what is hidden

@@ -233,7 +233,8 @@ class Pipeline:
         loc = self.localizer.locate(b.centroid_rect, b.disparity, max(b.disparity_sigma, terms.disparity_px),
                                     b.area, frame.gimbal, (cx, float(np.hypot(cy, jump))), (float(w), float(h)),
                                     terms.rim_px, in_frame, top, swing, True if terms.known_person else None,
-                                    None if top is None else self.extents.stature_m(track_id, self.rect.b, b.disparity))
+                                    None if top is None else self.extents.stature_m(track_id, self.rect.b, b.disparity),
+                                    self.headings.gait_share(track_id, frame.index))
         self.headings.add(track_id, frame.index, frame.t, loc.world)
         return loc
 
