@@ -48,12 +48,28 @@ class HeadingHistory:
             seen = []
         self._kept[track_id] = (index, [*seen[1 - self.frames:], (t, np.asarray(world, np.float64))])
 
+    def shares(self, track_id: int, index: int, origin: F64) -> tuple[float | None, float | None]:
+        """(s, m) from one fit of the positions kept before frame `index` (`swing_share`, `gait_share`);
+        (None, None) with fewer than min_frames of them or the last more than max_gap frames old."""
+        fit = self._velocity(track_id, index)
+        if fit is None:
+            return None, None
+        return self._swing(fit, origin), self._gait(fit)
+
     def swing_share(self, track_id: int, index: int, origin: F64) -> float | None:
         """s (see the module's docstring) from the positions kept before frame `index`; None with fewer than
         min_frames of them or the last more than max_gap frames old."""
+        return self.shares(track_id, index, origin)[0]
+
+    def gait_share(self, track_id: int, index: int) -> float | None:
+        """m = min(|v| / v_0, 1): how fully the body walks (0 standing still, 1 at a walking speed or
+        faster), from the same fit as swing_share, |v|² less the fit's own variance (the positions' scatter
+        about the line: a standing body's range noise of 0.1 m at 10 m made it walk at 0.2 m/s); None where
+        that fit has none."""
         fit = self._velocity(track_id, index)
-        if fit is None:
-            return None
+        return None if fit is None else self._gait(fit)
+
+    def _swing(self, fit: tuple[F64, F64, float], origin: F64) -> float | None:
         v_h, last, _ = fit
         los = last - origin
         u = np.array([los[0], los[2]])
@@ -63,14 +79,7 @@ class HeadingHistory:
         across = abs(float(v_h[0] * u[1] - v_h[1] * u[0])) / n  # |v_⊥| (m/s)
         return min(across / max(float(np.hypot(*v_h)), self.walk_mps), 1.0)
 
-    def gait_share(self, track_id: int, index: int) -> float | None:
-        """m = min(|v| / v_0, 1): how fully the body walks (0 standing still, 1 at a walking speed or
-        faster), from the same fit as swing_share, |v|² less the fit's own variance (the positions' scatter
-        about the line: a standing body's range noise of 0.1 m at 10 m made it walk at 0.2 m/s); None where
-        that fit has none."""
-        fit = self._velocity(track_id, index)
-        if fit is None:
-            return None
+    def _gait(self, fit: tuple[F64, F64, float]) -> float:
         v_h, _, var_v = fit
         return min(float(np.sqrt(max(float(v_h @ v_h) - var_v, 0.0))) / self.walk_mps, 1.0)
 

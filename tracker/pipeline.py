@@ -16,7 +16,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from tracker.bgdepth import BackgroundDepth
+from tracker.bgdepth import BackgroundDepth, CorrespondenceMap
 from tracker.bglearn import LearntBackground, Sighting, StreamLearnConfig, StreamLearner, changed_box
 from tracker.detect import Box, DetectorConfig, StereoSubtractor, paint_masks
 from tracker.disparity_sigma import parts_sigma
@@ -186,10 +186,11 @@ class Pipeline:
         locs = [self._locate(frame, b, blobs, i, t0) for b, i in zip(blobs, ids, strict=True)]
         self._done = (frame, blobs, ids, hints, seek)  # for `between_frames`
         t3 = time.perf_counter()
-        self.subtractor.update_floor(self.subtractor.foreground_low([(b.box, b.mask) for b in blobs]))
+        masks = [(b.box, b.mask) for b in blobs]
+        self.subtractor.update_floor(self.subtractor.foreground_low(masks))
         gain = self.temporal.gain or (max(blobs, key=lambda b: b.area).gain if blobs else self._last_gain)
         self._last_gain = gain
-        self.subtractor.update_left_background(frame, [(b.box, b.mask) for b in blobs], gain)
+        self.subtractor.update_left_background(frame, masks, gain)
         if self.learner is not None:
             seen = [Sighting(b.box, b.mask, b.disparity) for b in blobs]
             learnt = self.learner.observe(frame, gain, not cands.moving, seen)
@@ -229,12 +230,12 @@ class Pipeline:
         cy = float(np.hypot(terms.centroid_px[1], ky))
         in_frame = b.box[1] > 0 and b.box[3] < self.rig.left.size[1]  # its box reaches neither top nor bottom
         top = self._top_px(b) if terms.hidden_below and in_frame else None  # a body seen over what hides it
-        swing = self.headings.swing_share(track_id, frame.index, self.localizer.origin)
+        swing, gait = self.headings.shares(track_id, frame.index, self.localizer.origin)
         loc = self.localizer.locate(b.centroid_rect, b.disparity, max(b.disparity_sigma, terms.disparity_px),
                                     b.area, frame.gimbal, (cx, float(np.hypot(cy, jump))), (float(w), float(h)),
                                     terms.rim_px, in_frame, top, swing, True if terms.known_person else None,
                                     None if top is None else self.extents.stature_m(track_id, self.rect.b, b.disparity),
-                                    self.headings.gait_share(track_id, frame.index))
+                                    gait)
         self.headings.add(track_id, frame.index, frame.t, loc.world)
         return loc
 
@@ -247,21 +248,25 @@ class Pipeline:
 
     def _sigma_terms(self, frame: StereoFrame, b: Blob, blobs: list[Blob], track_id: int | None = None
                      ) -> SigmaTerms:
-        """The blob's SigmaTerms; track_id: its track, whose history may know it as a person (None: not)."""
-        extra, gap_x, hidden_below, cut, whole, known = self._centroid_extra(frame, b, blobs, track_id)
-        return SigmaTerms(self._disparity_sigma(frame, b), extra, gap_x, self._rim_px(frame, b, known), hidden_below,
-                          cut, whole, known)
+        """The blob's SigmaTerms (track_id: its track, which may know it as a person); one correspondence map."""
+        mask, box = padded(b.mask, b.box, self.rig.left.size, left=2 + int(np.ceil(max(b.disparity, 0.0))),
+                           below=2 + b.box[3] - b.box[1])
+        cm = self.subtractor.correspondence(0, frame.gimbal, box)
+        extra, gap_x, hidden_below, cut, whole, known = self._centroid_extra(frame, b, blobs, track_id, (mask, box, cm))
+        x0, y0 = box[0], box[1]  # the blob's box within the ring's
+        rim = self._rim_px(frame, b, cm.crop((b.box[0] - x0, b.box[1] - y0, b.box[2] - x0, b.box[3] - y0)), known)
+        return SigmaTerms(self._disparity_sigma(frame, b), extra, gap_x, rim, hidden_below, cut, whole, known)
 
-    def _rim_px(self, frame: StereoFrame, b: Blob, person: bool = False) -> tuple[float, float] | None:
+    def _rim_px(self, frame: StereoFrame, b: Blob, cm: CorrespondenceMap, person: bool = False
+                ) -> tuple[float, float] | None:
         """A solid body's outline's 1-σ (px, x and y) from its rim's contrast against the temporal model or,
         the cameras moving, the stereo pair's (tracker.rim_contrast); None without a SolidPrior, or for an
         upright body (or `person`, known as one) while the cameras move (its outline warped: the
-        SolidPrior's fixed rim term)."""
+        SolidPrior's fixed rim term). cm: the background's correspondences over the blob's box."""
         model = self.subtractor.left_background(frame.gimbal)
         if self.localizer.solid is None or (model is None and (person or self._seen_as(b)[0])):
             return None
         if model is None:
-            cm = self.subtractor.correspondence(0, frame.gimbal, b.box)
             res, tested = stereo_residual(frame.left, frame.right, b.box, b.mask, b.disparity, cm, self.rect)
             return rim_sigma_px(faint_shares_of(b.mask, res, tested, self.rim_contrast), self.rim_contrast)
         gain = self.temporal.gain or b.gain
@@ -313,7 +318,8 @@ class Pipeline:
         fits = self.verifier.part_fits(frame, b)
         return parts_sigma([d for d, _ in fits], b.disparity_sigma, [s for _, s in fits])
 
-    def _centroid_extra(self, frame: StereoFrame, b: Blob, blobs: list[Blob], track_id: int | None = None
+    def _centroid_extra(self, frame: StereoFrame, b: Blob, blobs: list[Blob], track_id: int | None,
+                        ring: tuple[BoolA, Box, CorrespondenceMap]
                         ) -> tuple[tuple[float, float], float, bool, tuple[float, float], tuple[bool, bool], bool]:
         """The centroid's further 1-σ (px, x and y): where its outline is drawn by warping (no temporal
         model at this pose: the cameras move; tracker.outline), the outline's whole pixels and the parts of
@@ -331,11 +337,10 @@ class Pipeline:
         3.02 there."""
         others = [e for o in blobs if o is not b for e in object_and_shadow(o.box, o.mask, o.disparity, o.bg_disparity)]
         upright, wide = self._seen_as(b)
-        solid = self.localizer.solid  # a person whose top alone may show now: its track showed it whole
-        seen = not upright and solid is not None and track_id is not None and \
+        hidden_below, cut, whole = self._partly_seen(b, others, upright, ring)
+        solid = self.localizer.solid  # a person whose top alone shows now: its track showed it whole
+        known = hidden_below and not upright and solid is not None and track_id is not None and \
             self.extents.seen_upright(track_id, solid.upright_aspect)
-        hidden_below, cut, whole = self._partly_seen(frame, b, others, upright)
-        known = seen and hidden_below
         edge, (gap_x, gap_y) = outline_sigma_px(b.mask)
         px, py = 0.0, 0.0
         # a car's cabin over its body, the space between a person's legs: their shape; a person's x: its
@@ -347,8 +352,8 @@ class Pipeline:
             px, py = float(np.hypot(px, ox)), float(np.hypot(py, oy))
         return (px, py), gap_x, hidden_below, cut, whole, known
 
-    def _partly_seen(self, frame: StereoFrame, b: Blob, others: list[tuple[Box, BoolA, float]], upright: bool
-                     ) -> tuple[bool, tuple[float, float], tuple[bool, bool]]:
+    def _partly_seen(self, b: Blob, others: list[tuple[Box, BoolA, float]], upright: bool,
+                     ring: tuple[BoolA, Box, CorrespondenceMap]) -> tuple[bool, tuple[float, float], tuple[bool, bool]]:
         """Whether a nearer background cuts the blob's bottom and nothing its top, and the centroid's
         extra 1-σ (px, x and y) where the blob is cut by the image border, by another object found this
         frame (others: box, mask, disparity) or by a nearer background (the cameras moving, too: pan:body
@@ -361,9 +366,7 @@ class Pipeline:
         hidden legs stand under what is seen. On the frames such a body is placed from its top (walk,
         foliage, two-targets, endless), that move made the centroid's x term 0.45 to 1.17 px (medians)
         for azimuth errors of 0.15 to 0.27 px (medians); 90 to 98 % of those frames were within 1σ."""
-        mask, box = padded(b.mask, b.box, self.rig.left.size, left=2 + int(np.ceil(max(b.disparity, 0.0))),
-                           below=2 + b.box[3] - b.box[1])
-        cm = self.subtractor.correspondence(0, frame.gimbal, box)
+        mask, box, cm = ring  # the blob's mask over its box grown (`padded`), the correspondences there
         disp, valid = with_objects(cm.disparity, cm.valid, box, others)
         n = min(b.box[3] + 2, self.rig.left.size[1]) - box[1]  # cut_sides: the 2-px ring below, not the ground
         objects = painted(box, others)
