@@ -119,7 +119,7 @@ class SolidPrior:
     NEES was 1.45 on walk, 1.54 on illumination, 2.67 on pan (the errors' mean -0.7 to -1.2 σ). The share
     depends on the heading (`shift_up`): walking across the line of sight, its striding legs and swinging
     arms spread the silhouette low and the centre lies higher above its centroid than seen from the front.
-    On 1,950 frames of six scenes' walkers seen whole, the elevation error (with the fixed share) was +0.9
+    On 2,150 frames of six scenes' walkers seen whole, the elevation error (with the fixed share) was +0.9
     to +2.4 % of the height seen from the front (s < 0.3, tracker.heading) and -2.5 to -3.8 % from the
     side (s > 0.85), alike on all six; a least-squares fit in s² (each scene weighted alike) gave 1.12 %
     (`upright_shift_front`) and 6.83 % (`upright_shift_side`), the errors' rms 3.35 -> 2.84 % of the
