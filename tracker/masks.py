@@ -129,6 +129,29 @@ def temporal_outline(key: U8, bg: NDArray[np.float32], dev: NDArray[np.float32],
     return with_head(inside | (band & changed), close=True), g, changed
 
 
+def changed_holes_filled(mask: BoolA, changed: BoolA, share: float = 0.25) -> BoolA:
+    """The mask with each of its holes (4-connected) filled where at least `share` of the hole's pixels
+    changed (`changed`: |Γ - g B| past its strict limit, same shape). The rim's growth (tracker.rim) closes
+    the mouths of notches the outline left on a walker's shaded side, and may not take changed pixels in
+    (they may be another object's); the notch stays a hole. Over walk:body's walkers, 2,810 hole pixels
+    were changed, all on the body; of holes with a quarter or more changed, 3,000 of 3,008 pixels were the
+    body's (endless:body: 2,543 of 2,551). Holes with no change are mostly the background between a
+    standing walker's legs (endless:body: 7,312 of 7,779 pixels) and stay."""
+    m8 = mask.view(np.uint8)
+    contours, _ = cv2.findContours(m8, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    if not contours:
+        return mask
+    holes = (_filled(list(contours), mask.shape) & ~mask).view(np.uint8)
+    n, labels = cv2.connectedComponents(holes, connectivity=4)
+    if n < 2:
+        return mask
+    size = np.bincount(labels.ravel(), minlength=n)
+    moved = np.bincount(labels[changed], minlength=n)
+    fill = moved >= share * size
+    fill[0] = False
+    return np.asarray(mask | fill[labels])
+
+
 def change(key: U8, bg: NDArray[np.float32], g: float) -> NDArray[np.float32]:
     """|Γ - g B|: how far each pixel is from the temporal background at global gain g."""
     return np.asarray(np.abs(key.astype(np.float32) - np.float32(g) * bg), np.float32)

@@ -23,6 +23,7 @@ from tracker.frames import StereoFrame
 from tracker.growth import grow_tracked
 from tracker.masks import (
     NEAR,
+    changed_holes_filled,
     found_pixels,
     key_mask,
     largest_component,
@@ -201,6 +202,8 @@ class Verifier:
         if self.rim is not None and model is not None and changed is not None:  # cameras still (the model
             # drew the outline, so `changed` is known): the rim eq. (9) and the model missed
             obj = self.rim.recover(frame, box, cm, obj, fine.disparity, free & ~changed, gain, model)
+        if changed is not None:
+            obj = changed_holes_filled(obj, changed)
         elif self.rim is not None and model is None:  # cameras moving: where eq. (9) could not tell
             obj = self.rim.recover(frame, box, cm, obj, fine.disparity, free)
         if not obj.any():
