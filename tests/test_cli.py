@@ -128,8 +128,8 @@ def test_origin_moves_the_spherical_coordinates() -> None:
 
 
 def test_targets_solid_puts_the_range_behind_the_seen_face() -> None:
-    from tracker.localize import SolidPrior
     from tracker.sim.rig import default_rig
+    from tracker.solid_prior import SolidPrior
 
     def run(targets: str) -> list[dict[str, float]]:
         out = tmeye("track", "--scenario", "walk:body", "--frames", "8", "--json", "--fast", "--targets", targets)

@@ -10,10 +10,11 @@ import cv2
 import numpy as np
 from sim_helpers import run_frames
 
-from tracker.localize import Localizer, SolidPrior
+from tracker.localize import Localizer
 from tracker.rectify import Rectifier
 from tracker.rim_contrast import RimContrastConfig, faint_shares, rim_sigma_px
 from tracker.sim.rig import default_rig
+from tracker.solid_prior import SolidPrior
 
 CFG = RimContrastConfig()
 

@@ -112,10 +112,11 @@ def test_height_history_takes_half_of_a_piece_lost_or_gained() -> None:
 
 def test_an_upright_bodys_hull_gap_counts_along_y_only() -> None:
     # a walker 32 px wide and 110 px high, one arm held out (a notch between it and the torso, to the
-    # right): for a person (tracker.localize.SolidPrior.upright) the notches are the spaces between its limbs
+    # right): for a person (tracker.solid_prior.SolidPrior.upright) the notches are the spaces between its limbs
     # and the gap's x term is left to the prior's upright_x_var (tracker.localize.with_gap_x); flat targets
     # (no prior) and a body lying on its side (110 px wide, 32 px high) keep it, in quadrature
-    from tracker.localize import SolidPrior, with_gap_x
+    from tracker.localize import with_gap_x
+    from tracker.solid_prior import SolidPrior
 
     walker = np.zeros((120, 50), bool)
     walker[5:115, 10:30] = True  # torso and legs

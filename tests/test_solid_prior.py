@@ -1,4 +1,4 @@
-"""A solid target's unseen depth (tracker.localize.SolidPrior): the centre is placed behind the seen face
+"""A solid target's unseen depth (tracker.solid_prior.SolidPrior): the centre is placed behind the seen face
 along the left camera's line of sight (the ray of eq. 10's centroid) by ρ/2 times the smaller seen extent, and
 the range's 1-σ grows by σ_ρ/2 times it; the angles about the origin (midway between the lenses) move only by that
 shift's parallax; without a prior (flat targets) nothing changes."""
@@ -12,10 +12,11 @@ import pytest
 from sim_helpers import run_frames
 
 from tracker import pipeline
-from tracker.localize import Localizer, SolidPrior
+from tracker.localize import Localizer
 from tracker.rectify import Rectifier
 from tracker.segmentation import outline_sigma_px
 from tracker.sim.rig import default_rig
+from tracker.solid_prior import SolidPrior
 
 
 def _pair(z_m: float, extent_px: tuple[float, float]):  # type: ignore[no-untyped-def]

@@ -13,10 +13,11 @@ from numpy.typing import NDArray
 from tracker.detect import DetectorConfig
 from tracker.frames import GimbalState
 from tracker.geometry import StereoRig
-from tracker.localize import SolidPrior, spherical
+from tracker.localize import spherical
 from tracker.pipeline import Detection, FrameResult, Pipeline
 from tracker.sim.render import FrameTruth, TargetTruth
 from tracker.sim.scenarios import Scenario, SimRig, get_scenario
+from tracker.solid_prior import SolidPrior
 
 F64 = NDArray[np.float64]
 Progress = Callable[[int, int], None]

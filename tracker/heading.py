@@ -14,7 +14,7 @@ in proportion (a person standing has v ≈ 0 and s ≈ 0). v is the least-square
 `frames` world positions against time; its noise lies mostly along the line of sight (the range's), which
 only moves s towards 0 where the body hardly moves across it. `gait_share`, m = min(|v| / v_0, 1) with |v|²
 less the fit's own variance, says how fully it walks (a standing body's range noise would have it walk).
-tracker.localize.SolidPrior turns s and m into the upright body's centroid 1-σ along x.
+tracker.solid_prior.SolidPrior turns s and m into the upright body's centroid 1-σ along x.
 
 Measured on the simulator's walkers (frames not cut by the image's edge or by another object), the azimuth
 error against the volume centre in units of the seen height h, Gaussian-equivalent (median |error| / 0.674),

@@ -24,7 +24,7 @@ from tracker.egomotion import PoseCompensation
 from tracker.frames import StereoFrame
 from tracker.geometry import StereoRig
 from tracker.heading import HeadingHistory
-from tracker.localize import Localization, Localizer, SolidPrior, with_gap_x
+from tracker.localize import Localization, Localizer, with_gap_x
 from tracker.one_camera import OneCameraConfig
 from tracker.outline import OutlineConfig, warped_outline_sigma_px
 from tracker.rectify import Rectifier
@@ -32,6 +32,7 @@ from tracker.regions import hints_inside
 from tracker.rim_contrast import RimContrastConfig, faint_shares, faint_shares_of, rim_sigma_px, stereo_residual
 from tracker.schedule import SigmaSchedule, SigmaTerms, VerifySchedule
 from tracker.segmentation import ExtentHistory, HeightHistory, outer_runs, outline_sigma_px
+from tracker.solid_prior import SolidPrior
 from tracker.split import join_occluded, join_parts
 from tracker.temporal import TemporalConfig, TemporalDetector, without_duplicates
 from tracker.tracks import MultiTracker, TrackerConfig
@@ -96,7 +97,7 @@ class Pipeline:
         verified, as offline evaluation needs for repeatable results). sigma_budget_ms: in real time, a
         tracked target's costly 1-σ terms are worked out afresh only when they would end within this many
         ms of the step's start, else taken from a recent frame (tracker.schedule.SigmaSchedule; None:
-        every frame). solid: what is known of solid targets' unseen depth (tracker.localize.SolidPrior;
+        every frame). solid: what is known of solid targets' unseen depth (tracker.solid_prior.SolidPrior;
         None: flat targets, the range is the seen face's). between_frames: the caller calls
         `between_frames` after each step, so the searches the budget leaves out wait for it. one_camera: when
         a tracked object only the left camera sees is taken at its track's disparity (tracker.one_camera)."""

@@ -20,7 +20,7 @@ from the frames seen whole (98 % or more) of the six still `NAME:body` scenarios
 centroid against the true silhouette's was 0.02-0.21 px where the left and right sides' shares summed
 to under 0.2, 0.18-0.26 px at 0.2-0.4, 0.29-0.36 at 0.4-0.6, 0.35-0.53 at 0.6-0.8 (about 0.6 px times
 the sum: 1.7 / (2 √2) with the sum split evenly), and 0.57-1.18 above (the walkers' heavy tail, whose x
-has a prior of its own: tracker.localize.SolidPrior.upright_x_var). The fixed term it replaces, 0.5 /
+has a prior of its own: tracker.solid_prior.SolidPrior.upright_x_var). The fixed term it replaces, 0.5 /
 √2 = 0.35 px, is this at a summed share of 0.6.
 
 On approach:body the sphere's azimuth and elevation NEES went 0.68 -> 0.91 and 0.17 -> 0.80 (within 1σ
@@ -34,7 +34,7 @@ its sides' faint shares were 0.07 (left), 0.15 (right), 0.01 (top), 0.49 (bottom
 alike at the bottom (0.50 on the pixels the left key tested, 0.48 on the right key's): azimuth within 1σ
 0.94 -> 0.67, NEES 0.30 -> 1.17 against the fixed term's 0.35 px; elevation 0.66 -> 0.86 and 0.95 ->
 0.75 (its bottom's share says 0.42 px where the centroid was off by 0.35 px rms along y; side_px is the
-still scenes'). An upright body keeps the fixed term while the cameras move (tracker.localize.SolidPrior:
+still scenes'). An upright body keeps the fixed term while the cameras move (tracker.solid_prior.SolidPrior:
 its x term counts the rim then, the outline being warped).
 """
 

@@ -198,7 +198,7 @@ class SigmaTerms:
     it is seen in part or its outline is drawn by warping (tracker.visibility, tracker.outline), and from
     the outline's whole pixels and a body's hull gap (tracker.segmentation), but for the hull gap's x term:
     gap_x_px, apart, for it counts only where the target is not an upright body at the frame the terms are
-    used for (tracker.localize.SolidPrior.upright; the terms may be a few frames old); rim_px, a solid
+    used for (tracker.solid_prior.SolidPrior.upright; the terms may be a few frames old); rim_px, a solid
     body's outline's 1-σ (px, x and y) from its rim's contrast (tracker.rim_contrast; None: not known, the
     cameras moving, or no SolidPrior); hidden_below, a nearer background hides the target's bottom while
     its top is seen (tracker.visibility.Cuts; an upright body's centre is then found from its top,

@@ -21,12 +21,12 @@ from tracker.closedloop_eval import closed_loop_imm, mount_range
 from tracker.evaluation import survey_poses, target_prior
 from tracker.frames import FrameSource
 from tracker.geometry import StereoRig, load_rig
-from tracker.localize import SolidPrior
 from tracker.pipeline import Pipeline
 from tracker.rigcheck import RigError
 from tracker.servo import ServoError, SimulatedGimbal, open_servo
 from tracker.servo.base import AxisLimits, ServoDriver
 from tracker.sim.scenarios import SimRig, get_scenario
+from tracker.solid_prior import SolidPrior
 
 
 class ComposeError(ValueError):

@@ -31,7 +31,7 @@ class RuntimeConfig:
     tracker.schedule.SigmaSchedule). baseline_limits_m: the plausible
     baselines (m) a rig file is checked against (default tracker.rigcheck.BASELINE_LIMITS_M, 1 cm to 10 m).
     targets: what the range is measured to: "solid" (a body's centre, half its assumed unseen depth behind
-    the seen face, with that depth's uncertainty in σ_r: tracker.localize.SolidPrior), "flat" (the seen
+    the seen face, with that depth's uncertainty in σ_r: tracker.solid_prior.SolidPrior), "flat" (the seen
     face: flat boards) or "auto" (solid, except for the simulator's flat plates: a simulated scene, or the
     recording of one, whose scenario is not NAME:body)."""
 
