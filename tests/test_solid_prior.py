@@ -380,3 +380,30 @@ def test_an_upright_bodys_centre_lies_higher_above_its_silhouette_seen_from_the_
     assert ys[0] == pytest.approx(200.0 - prior.upright_shift_front * 200.0, abs=1e-6)
     assert ys[2] == pytest.approx(200.0 - prior.upright_shift_side * 200.0, abs=1e-6)
     assert ys[2] < ys[1] < ys[0]
+
+
+def test_a_person_seen_side_on_has_its_centre_deeper_behind_its_face() -> None:
+    # seen width plus depth along the line of sight ≈ g h: a narrow silhouette (a walker side-on, stride
+    # closed) puts the centre κ (g h - w) behind the face, with half that as its 1-σ; a wide one keeps ρ/2 w
+    prior = SolidPrior()
+    g, k = prior.upright_girth, prior.upright_side_ratio
+    side = k * (g * 160.0 - 20.0)
+    assert prior.behind_face_px(20.0, 160.0) == pytest.approx((side, prior.upright_side_sigma * side))
+    assert side > 0.5 * prior.upright_ratio * 20.0
+    front = (0.5 * prior.upright_ratio * 70.0, 0.5 * prior.upright_ratio_sigma * 70.0)
+    assert prior.behind_face_px(70.0, 160.0) == pytest.approx(front)
+    ball = prior.behind_face_px(60.0, 50.0)  # not upright: ρ/2 of the smaller extent, no side term
+    assert ball == pytest.approx((0.5 * prior.ratio * 50.0, 0.5 * prior.ratio_sigma * 50.0))
+    assert prior.behind_face_px(20.0, 160.0, upright=False)[0] == pytest.approx(0.5 * prior.ratio * 20.0)
+    # the localiser moves the face point that far along the left camera's ray, and widens σ_r by its 1-σ
+    rect = Rectifier(default_rig())
+    d = rect.f * rect.rig.baseline / 10.0
+    args = (np.array([360.0, 220.0]), d, 0.05, 3000, None)
+    flat = Localizer(rect).locate(*args, (0.0, 0.0), (20.0, 160.0))
+    person = Localizer(rect, solid=SolidPrior(upright_shift=0.0, upright_shift_front=0.0, upright_shift_side=0.0,
+                                              rim_sigma_px=0.0, upright_sigma=0.0)).locate(
+        *args, (0.0, 0.0), (20.0, 160.0))
+    c = rect.rig.left.c
+    moved = float(np.linalg.norm(person.rig - c) - np.linalg.norm(flat.rig - c))
+    assert math.isclose(moved, side * float(flat.rig[2]) / rect.f, rel_tol=1e-6)
+    assert person.sigma_r > flat.sigma_r + 0.5 * prior.upright_side_sigma * side * float(flat.rig[2]) / rect.f

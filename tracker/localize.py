@@ -118,7 +118,7 @@ class Localizer:
             upright = self.solid is not None and extent_px is not None and self.solid.upright(*extent_px)
         if self.solid is not None and extent_px is not None and upright:
             if top_px is not None:
-                from_top = self._below_top(top_px, disparity, extent_px[0], stature)
+                from_top = self._below_top(top_px, disparity, extent_px, stature)
                 y = from_top[0]
             elif in_frame:
                 y -= self.solid.shift_up(swing) * extent_px[1]  # a person's volume centre above its silhouette's
@@ -145,10 +145,9 @@ class Localizer:
                 S[1, 1] += ry**2 + max(s_up**2 - extra_px[1] ** 2, 0.0)  # y: max(extra, upright)
         cov_rig = J @ S @ J.T + cal.scale_rel**2 * np.outer(X_rig, X_rig)  # f·b off by ε: X -> (1 + ε) X
         if self.solid is not None and extent_px is not None:
-            prior = self.solid.depth_ratio(*extent_px, upright=upright)
-            e_px = extent_px[0] if upright else min(extent_px)  # a person's prior is on its seen width
-            X_meas = self._behind_face(X_meas, cov_rig, e_px, prior)[0]
-            X_rig, cov_rig = self._behind_face(X_rig, cov_rig, e_px, prior)
+            behind = self.solid.behind_face_px(*extent_px, upright=upright)
+            X_meas = self._behind_face(X_meas, cov_rig, behind)[0]
+            X_rig, cov_rig = self._behind_face(X_rig, cov_rig, behind)
         return self._in_world(X_rig, cov_rig, X_meas, gimbal)
 
     def _in_world(self, X_rig: F64, cov_rig: F64, X_meas: F64, gimbal: GimbalState | None) -> Localization:
@@ -165,13 +164,13 @@ class Localizer:
         sr, st, sp = (float(np.sqrt(max(cs[i, i], 0.0))) for i in range(3))
         return Localization(X_rig, X_w, cov_w, r, th, ph, sr, st, sp, R_wr @ X_meas)
 
-    def _below_top(self, top_px: float, disparity: float, width_px: float,
+    def _below_top(self, top_px: float, disparity: float, extent_px: tuple[float, float],
                    stature: tuple[float, float] | None = None) -> tuple[float, float]:
         """An upright body's centre's rectified y (px) from its outline's top and its 1-σ (px): c H f / Z_c
         below the top (c = centre_below_top, H = height_m ± σ_H, or that combined with the stature its
-        track measured, inverse-variance weighted), Z_c = Z (1 + ρ/2 · w/f) the centre's depth behind the
-        face seen at Z = f b / d, w its seen width (px), ρ the upright ratio; 1-σ f / Z_c · √((c σ_H)² +
-        (σ_c H)²)."""
+        track measured, inverse-variance weighted), Z_c = Z (1 + δ/f) the centre's depth behind the face
+        seen at Z = f b / d, δ (px) its depth behind the face for its seen extent (width, height; px:
+        SolidPrior.behind_face_px of an upright body); 1-σ f / Z_c · √((c σ_H)² + (σ_c H)²)."""
         assert self.solid is not None
         s = self.solid
         H, s_h = s.height_m, s.height_sigma_m
@@ -182,16 +181,16 @@ class Localizer:
             elif s_h > 0.0:  # inverse-variance weighted with the prior (an exact prior stands)
                 w_p, w_m = 1.0 / s_h**2, 1.0 / var_m
                 H, s_h = (w_p * H + w_m * stature[0]) / (w_p + w_m), (w_p + w_m) ** -0.5
-        f_over_z = disparity / self.rect.b / (1.0 + 0.5 * s.upright_ratio * width_px / self.rect.f)  # f / Z_c
+        behind = s.behind_face_px(*extent_px, upright=True)[0]
+        f_over_z = disparity / self.rect.b / (1.0 + behind / self.rect.f)  # f / Z_c
         drop = s.centre_below_top * H * f_over_z
         sigma = f_over_z * float(np.hypot(s.centre_below_top * s_h, s.centre_below_top_sigma * H))
         return top_px + drop, sigma
 
-    def _behind_face(self, X_rig: F64, cov_rig: F64, extent_px: float, prior: tuple[float, float]
-                     ) -> tuple[F64, F64]:
-        """A solid target's centre: the measured face point X_rig (3,) moved ρ/2 · e behind along the
-        left camera's ray through it, e = extent_px · Z / f (m) its smaller seen extent; the variance
-        (σ_ρ/2 · e)² added along that ray (prior = (ρ, σ_ρ): SolidPrior.depth_ratio). The centroid of
+    def _behind_face(self, X_rig: F64, cov_rig: F64, behind_px: tuple[float, float]) -> tuple[F64, F64]:
+        """A solid target's centre: the measured face point X_rig (3,) moved δ Z / f behind along the
+        left camera's ray through it, the variance (σ_δ Z / f)² added along that ray ((δ, σ_δ) = behind_px:
+        SolidPrior.behind_face_px, pixels at the face's depth Z). The centroid of
         eq. (10) is the left image's, so the centre lies on that ray: moved along the ray from the midpoint
         of the lens centres instead, a point δ too near (the face) stayed b/2 · δ / Z² rad to the left of it
         (approach:body, a ball at 2 to 5 m: azimuth RMSE 0.137 deg; along the left ray 0.095 deg)."""
@@ -199,9 +198,8 @@ class Localizer:
         ray = X_rig - c
         dist = float(np.linalg.norm(ray))
         u = ray / dist
-        e = extent_px * float(X_rig[2]) / self.rect.f  # metres
-        ratio, ratio_sigma = prior
-        half, s_half = 0.5 * ratio * e, 0.5 * ratio_sigma * e
+        m_per_px = float(X_rig[2]) / self.rect.f
+        half, s_half = behind_px[0] * m_per_px, behind_px[1] * m_per_px
         return np.asarray(X_rig + half * u), np.asarray(cov_rig + s_half**2 * np.outer(u, u))
 
 
