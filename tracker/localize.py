@@ -116,13 +116,16 @@ class Localizer:
         from_top = None
         if upright is None:
             upright = self.solid is not None and extent_px is not None and self.solid.upright(*extent_px)
-        if self.solid is not None and extent_px is not None and upright:
-            if top_px is not None:
-                from_top = self._below_top(top_px, disparity, extent_px, stature)
-                y = from_top[0]
-            elif in_frame:
-                y -= self.solid.shift_up(swing) * extent_px[1]  # a person's volume centre above its silhouette's
-            X_rig = self.rect.rect_to_rig(x, y, disparity)
+        behind = None  # a solid body's centre's depth behind its face and its 1-σ (px at the face's depth)
+        if self.solid is not None and extent_px is not None:
+            behind = self.solid.behind_face_px(*extent_px, upright=upright)
+            if upright:
+                if top_px is not None:
+                    from_top = self._below_top(top_px, disparity, behind[0], stature)
+                    y = from_top[0]
+                elif in_frame:
+                    y -= self.solid.shift_up(swing) * extent_px[1]  # a person's volume centre above its silhouette's
+                X_rig = self.rect.rect_to_rig(x, y, disparity)
         J = self.rect.rig_to_rect_jacobian(x, y, disparity)
         s_c = 0.0 if self.centroid_sigma_px is None else max(self.centroid_sigma_px, 0.5 / np.sqrt(max(area, 1)))
         cal = self.rect.rig.sigma  # the calibration's own uncertainty (tracker.calib_sigma)
@@ -144,8 +147,7 @@ class Localizer:
             else:
                 S[1, 1] += ry**2 + max(s_up**2 - extra_px[1] ** 2, 0.0)  # y: max(extra, upright)
         cov_rig = J @ S @ J.T + cal.scale_rel**2 * np.outer(X_rig, X_rig)  # f·b off by ε: X -> (1 + ε) X
-        if self.solid is not None and extent_px is not None:
-            behind = self.solid.behind_face_px(*extent_px, upright=upright)
+        if behind is not None:
             X_meas = self._behind_face(X_meas, cov_rig, behind)[0]
             X_rig, cov_rig = self._behind_face(X_rig, cov_rig, behind)
         return self._in_world(X_rig, cov_rig, X_meas, gimbal)
@@ -164,13 +166,13 @@ class Localizer:
         sr, st, sp = (float(np.sqrt(max(cs[i, i], 0.0))) for i in range(3))
         return Localization(X_rig, X_w, cov_w, r, th, ph, sr, st, sp, R_wr @ X_meas)
 
-    def _below_top(self, top_px: float, disparity: float, extent_px: tuple[float, float],
+    def _below_top(self, top_px: float, disparity: float, behind_px: float,
                    stature: tuple[float, float] | None = None) -> tuple[float, float]:
         """An upright body's centre's rectified y (px) from its outline's top and its 1-σ (px): c H f / Z_c
         below the top (c = centre_below_top, H = height_m ± σ_H, or that combined with the stature its
         track measured, inverse-variance weighted), Z_c = Z (1 + δ/f) the centre's depth behind the face
-        seen at Z = f b / d, δ (px) its depth behind the face for its seen extent (width, height; px:
-        SolidPrior.behind_face_px of an upright body); 1-σ f / Z_c · √((c σ_H)² + (σ_c H)²)."""
+        seen at Z = f b / d, δ = behind_px its depth behind the face (px at Z: SolidPrior.behind_face_px of
+        an upright body); 1-σ f / Z_c · √((c σ_H)² + (σ_c H)²)."""
         assert self.solid is not None
         s = self.solid
         H, s_h = s.height_m, s.height_sigma_m
@@ -181,8 +183,7 @@ class Localizer:
             elif s_h > 0.0:  # inverse-variance weighted with the prior (an exact prior stands)
                 w_p, w_m = 1.0 / s_h**2, 1.0 / var_m
                 H, s_h = (w_p * H + w_m * stature[0]) / (w_p + w_m), (w_p + w_m) ** -0.5
-        behind = s.behind_face_px(*extent_px, upright=True)[0]
-        f_over_z = disparity / self.rect.b / (1.0 + behind / self.rect.f)  # f / Z_c
+        f_over_z = disparity / self.rect.b / (1.0 + behind_px / self.rect.f)  # f / Z_c
         drop = s.centre_below_top * H * f_over_z
         sigma = f_over_z * float(np.hypot(s.centre_below_top * s_h, s.centre_below_top_sigma * H))
         return top_px + drop, sigma

@@ -137,8 +137,7 @@ def changed_holes_filled(mask: BoolA, changed: BoolA, share: float = 0.25) -> Bo
     were changed, all on the body; of holes with a quarter or more changed, 3,000 of 3,008 pixels were the
     body's (endless:body: 2,543 of 2,551). Holes with no change are mostly the background between a
     standing walker's legs (endless:body: 7,312 of 7,779 pixels) and stay."""
-    m8 = mask.view(np.uint8)
-    contours, _ = cv2.findContours(m8, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    contours = _outer_contours(mask, False)
     if not contours:
         return mask
     holes = (_filled(list(contours), mask.shape) & ~mask).view(np.uint8)

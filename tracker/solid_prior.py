@@ -196,8 +196,8 @@ class SolidPrior:
         σ_ρ/2 · e (depth_ratio; e its seen width if upright, else its smaller extent); for an upright body
         at least κ (g h - w) ± upright_side_sigma times that (seen side-on; upright_girth g,
         upright_side_ratio κ). upright: known to be a person or not; None: by the extent."""
-        ratio, ratio_sigma = self.depth_ratio(width_px, height_px, upright)
         up = self.upright(width_px, height_px) if upright is None else upright
+        ratio, ratio_sigma = self.depth_ratio(width_px, height_px, up)
         e = width_px if up else min(width_px, height_px)
         half, s_half = 0.5 * ratio * e, 0.5 * ratio_sigma * e
         if up:

@@ -206,10 +206,10 @@ class Verifier:
         if self.rim is not None and model is not None and changed is not None:  # cameras still (the model
             # drew the outline, so `changed` is known): the rim eq. (9) and the model missed
             obj = self.rim.recover(frame, box, cm, obj, fine.disparity, free & ~changed, gain, model)
-        if changed is not None:
-            obj = changed_holes_filled(obj, changed)
         elif self.rim is not None and model is None:  # cameras moving: where eq. (9) could not tell
             obj = self.rim.recover(frame, box, cm, obj, fine.disparity, free)
+        if changed is not None:  # the holes the rim's growth closed where the model saw change
+            obj = changed_holes_filled(obj, changed)
         if not obj.any():
             return None
         m8 = obj.view(np.uint8)
