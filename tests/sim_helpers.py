@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 from tracker.evaluation import target_prior
-from tracker.pipeline import FrameResult, Pipeline
+from tracker.pipeline import Pipeline
+from tracker.results import FrameResult
 from tracker.sim.scenarios import SimFrame, SimRig, get_scenario
 
 

@@ -142,8 +142,8 @@ def test_the_updates_since_the_last_stereo_sighting_count_misses_between_one_cam
 def test_one_object_per_track_continued() -> None:
     """A track's prediction lying on an object found, or within the gate of a region already taken for it
     by one camera, is offered to no other region."""
+    from tracker.results import Blob
     from tracker.temporal import _unclaimed
-    from tracker.verify import Blob
 
     coast = np.array([[50.0, 270.0, 12.0, 1, 0.05, 0.03], [300.0, 250.0, 20.0, 0, 0.05, 0.03]])
     mask = np.ones((20, 20), bool)
@@ -254,7 +254,7 @@ def test_an_object_found_before_hides_a_tracked_one_from_the_right_camera_as_a_p
     (a walker at 12 m behind a ball at 5 m in the right image: two-targets:body): the plate's columns the
     post's right image covers are left out as a learnt post's are, and none without it."""
     from tracker.frames import StereoFrame
-    from tracker.verify import Blob
+    from tracker.results import Blob
 
     rng = np.random.default_rng(7)
     tex = np.asarray(cv2.GaussianBlur(rng.uniform(0, 255, (H, W + 40)).astype(np.float32), (0, 0), 1.5))

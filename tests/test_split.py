@@ -10,8 +10,8 @@ from tracker.frames import StereoFrame
 from tracker.geometry import Camera, StereoRig
 from tracker.rectify import Rectifier
 from tracker.regions import hints_around
+from tracker.results import Blob
 from tracker.split import join_occluded, join_parts, match_cost, own_pixels, same_body
-from tracker.verify import Blob
 
 W, H = 640, 480
 D_NEAR, D_FAR, D_BG = 30.0, 10.0, 2.0

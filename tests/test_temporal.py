@@ -9,9 +9,9 @@ import numpy as np
 
 from tracker.frames import StereoFrame
 from tracker.pipeline import Pipeline
+from tracker.results import Blob
 from tracker.sim.scenarios import SimRig, get_scenario, near_wall_scenario
 from tracker.temporal import TemporalConfig, texture_corr, without_duplicates
-from tracker.verify import Blob
 
 
 def _run(sim: SimRig, pipe: Pipeline, frames: int) -> tuple[int, int, list[float]]:

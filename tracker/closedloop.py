@@ -30,8 +30,9 @@ import numpy as np
 from tracker.aim import AimInput, ServoCommand
 from tracker.bgdepth import BackgroundDepth
 from tracker.frames import GimbalState, StereoFrame
-from tracker.pipeline import Detection, FrameResult, Pipeline
+from tracker.pipeline import Pipeline
 from tracker.predict import Measurement, PredictedState, TrackEstimate, UKFBankPredictor
+from tracker.results import Detection, FrameResult
 from tracker.servo.base import ServoDriver
 from tracker.servo.sim import SimulatedGimbal
 from tracker.sim.scenarios import SimRig

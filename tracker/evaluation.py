@@ -14,7 +14,8 @@ from tracker.detect import DetectorConfig
 from tracker.frames import GimbalState
 from tracker.geometry import StereoRig, gimbal_rotation
 from tracker.localize import spherical
-from tracker.pipeline import Detection, FrameResult, Pipeline
+from tracker.pipeline import Pipeline
+from tracker.results import Detection, FrameResult
 from tracker.sim.render import FrameTruth, TargetTruth
 from tracker.sim.scenarios import Scenario, SimRig, get_scenario
 from tracker.solid_prior import SolidPrior

@@ -9,7 +9,6 @@ threads and published to many subscribers.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
 from functools import cache, partial
 
 import cv2
@@ -18,7 +17,7 @@ from numpy.typing import NDArray
 
 from tracker.bgdepth import BackgroundDepth, CorrespondenceMap
 from tracker.bglearn import LearntBackground, Sighting, StreamLearnConfig, StreamLearner, changed_box
-from tracker.detect import Box, DetectorConfig, StereoSubtractor, paint_masks
+from tracker.detect import Box, DetectorConfig, StereoSubtractor
 from tracker.disparity_sigma import parts_sigma
 from tracker.egomotion import PoseCompensation
 from tracker.frames import StereoFrame
@@ -29,6 +28,7 @@ from tracker.one_camera import OneCameraConfig
 from tracker.outline import OutlineConfig, warped_outline_sigma_px
 from tracker.rectify import Rectifier
 from tracker.regions import hints_inside
+from tracker.results import Blob, Detection, FrameResult
 from tracker.rim_contrast import RimContrastConfig, faint_shares, faint_shares_of, rim_sigma_px, stereo_residual
 from tracker.schedule import SigmaSchedule, SigmaTerms, VerifySchedule
 from tracker.segmentation import ExtentHistory, HeightHistory, outer_runs, outline_sigma_px
@@ -36,7 +36,7 @@ from tracker.solid_prior import SolidPrior
 from tracker.split import join_occluded, join_parts
 from tracker.temporal import TemporalConfig, TemporalDetector, without_duplicates
 from tracker.tracks import MultiTracker, TrackerConfig
-from tracker.verify import Blob, Verifier
+from tracker.verify import Verifier
 from tracker.visibility import (
     VisibilityConfig,
     cut_sigma_px,
@@ -52,35 +52,6 @@ from tracker.visibility import (
 F64 = NDArray[np.float64]
 BoolA = NDArray[np.bool_]
 STAGES = ("candidates", "verify", "localize", "track")
-
-
-@dataclass(frozen=True)
-class Detection:
-    """One verified object: its blob, 3-D localisation and track id (a new track's id from its first
-    sighting; the track becomes primary only once confirmed)."""
-
-    blob: Blob
-    loc: Localization
-    track_id: int
-
-
-@dataclass(frozen=True)
-class FrameResult:
-    """Everything the pipeline knows after a frame. primary: the primary target's detection this frame,
-    None if it was not seen. stage_ms: time per stage (milliseconds). deferred_boxes: candidate boxes put
-    off to the next frame by the frame's time budget (tracker.schedule)."""
-
-    index: int
-    t: float
-    detections: tuple[Detection, ...]
-    primary_id: int | None
-    primary: Detection | None
-    stage_ms: dict[str, float] = field(default_factory=dict)
-    deferred_boxes: int = 0
-
-    def foreground_mask(self, shape: tuple[int, int]) -> NDArray[np.bool_]:
-        """The full-resolution left foreground mask of all verified objects, (H, W) bool."""
-        return paint_masks([(d.blob.box, d.blob.mask) for d in self.detections], 0, shape)
 
 
 class Pipeline:

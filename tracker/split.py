@@ -29,7 +29,7 @@ from tracker.regions import mask_centroid
 from tracker.visibility import right_shadow
 
 if TYPE_CHECKING:
-    from tracker.verify import Blob
+    from tracker.results import Blob
 
 F32 = NDArray[np.float32]
 BoolA = NDArray[np.bool_]

@@ -40,8 +40,9 @@ from tracker.masks import largest_region, temporal_outline
 from tracker.one_camera import OneCameraConfig, coast_sigma_px, hidden_from_right, nearest_prediction
 from tracker.rectify import Rectifier
 from tracker.regions import background_disparity, mask_centroid, nearest_hint
+from tracker.results import Blob
 from tracker.stereo import RegionMatch
-from tracker.verify import Blob, Verifier
+from tracker.verify import Verifier
 
 F32 = NDArray[np.float32]
 F64 = NDArray[np.float64]

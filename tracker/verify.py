@@ -10,7 +10,7 @@ exactly; Ivanov, Bobick and Liu's verification by warping in both directions).
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import cv2
 import numpy as np
@@ -35,6 +35,7 @@ from tracker.masks import (
 from tracker.one_camera import OneCameraConfig, seen_by_right
 from tracker.rectify import Rectifier
 from tracker.regions import background_disparity, hints_around, mask_centroid, nearest_hint, row_thirds
+from tracker.results import Blob
 from tracker.rim import DEFAULT_RIM, RimConfig, RimRecovery
 from tracker.split import join, own_pixels, same_body
 from tracker.stereo import RegionMatch
@@ -45,26 +46,6 @@ U8 = NDArray[np.uint8]
 F64 = NDArray[np.float64]
 F32 = NDArray[np.float32]
 BoolA = NDArray[np.bool_]
-
-
-@dataclass(frozen=True)
-class Blob:
-    """A verified object in one frame. box: raw-left pixels (x0, y0, x1, y1); mask: bool (y1-y0, x1-x0);
-    centroid_raw: eq. (10) in raw left pixels; centroid_rect: the same pixels' centroid in rectified
-    coordinates; disparity, disparity_sigma, bg_disparity in px (rectified); one_camera: seen by the left
-    camera alone, its disparity the one a track holds (tracker.one_camera)."""
-
-    box: Box
-    mask: BoolA
-    area: int
-    centroid_raw: F64
-    centroid_rect: F64
-    disparity: float
-    disparity_sigma: float
-    bg_disparity: float
-    score: float
-    gain: float = 1.0
-    one_camera: bool = False
 
 
 _MATCH_HALF = (24, 16)  # half width and height (px) of the largest window matched

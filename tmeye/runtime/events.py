@@ -10,7 +10,7 @@ from typing import Any
 
 from tracker.closedloop import LoopStep
 from tracker.frames import StereoFrame
-from tracker.pipeline import FrameResult
+from tracker.results import FrameResult
 
 
 @dataclass(frozen=True)

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from tracker.frames import StereoFrame
-from tracker.pipeline import Detection, FrameResult
+from tracker.results import Detection, FrameResult
 
 
 def _r(v: float, nd: int = 4) -> float:
