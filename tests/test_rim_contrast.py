@@ -1,6 +1,7 @@
 """The outline's 1-σ from its rim's contrast (tracker.rim_contrast): a rim that stands out from the temporal
 model has no such term, a side whose rim is faint has side_px times its faint share, and the localiser takes
-that in place of the solid prior's fixed rim term."""
+that in place of the solid prior's fixed rim term. A faint side's lost band is undone (rim_shift_px): the
+centroid moves towards the faint side, and its 1-σ is then the spread left."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ from sim_helpers import run_frames
 
 from tracker.localize import Localizer
 from tracker.rectify import Rectifier
-from tracker.rim_contrast import RimContrastConfig, faint_shares, rim_sigma_px
+from tracker.rim_contrast import RimContrastConfig, faint_shares, rim_shift_px, rim_sigma_px
 from tracker.sim.rig import default_rig
 from tracker.solid_prior import SolidPrior
 
@@ -55,6 +56,42 @@ def test_a_faint_side_widens_its_axis_by_half_its_term() -> None:
     bright = (frame.astype(np.float32) * 1.5).clip(0, 255).astype(np.uint8)
     assert faint_shares(mask, box, bright, wall, 1.5, CFG)[1] > 0.9
     assert faint_shares(mask, box, bright, wall, 1.0, CFG)[1] < 0.5  # the model's gain left out: wrong
+
+
+def _shaded_ball(falloff_px: float) -> tuple[np.ndarray, np.ndarray, tuple[float, float]]:
+    """A ball of radius 20 px at (80.3, 60.6) on a plain wall at grey 90, lit from the left: grey 190 but
+    within falloff_px of its right rim, where it darkens linearly to the wall's grey (a shaded limb). The
+    frame (120, 160) uint8, the wall B (float32) and the true disc's centroid (x, y)."""
+    ys, xs = np.mgrid[0:120, 0:160].astype(np.float64)
+    cx, cy, r = 80.3, 60.6, 20.0
+    dist = np.hypot(xs - cx, ys - cy)
+    inside = dist <= r
+    to_rim = r - dist  # px from the rim along the radius
+    right = np.clip((xs - cx) / r, 0.0, 1.0)  # the shade grows towards the right
+    shade = np.where(right > 0.3, np.clip(to_rim / falloff_px, 0.0, 1.0), 1.0)
+    frame = np.where(inside, 90.0 + 100.0 * shade, 90.0).round().astype(np.uint8)
+    true = (float(xs[inside].mean()), float(ys[inside].mean()))
+    return frame, np.full((120, 160), 90.0, np.float32), true
+
+
+def test_a_faint_sides_lost_band_is_undone_towards_it() -> None:
+    frame, wall, true = _shaded_ball(6.0)
+    box = (50, 30, 111, 91)
+    mask = np.abs(frame[30:91, 50:111].astype(np.float32) - wall[30:91, 50:111]) > 12.0  # eq. (9)'s ε
+    ys, xs = np.nonzero(mask)
+    seen = (50 + float(xs.mean()), 30 + float(ys.mean()))
+    assert seen[0] < true[0] - 0.1  # the shaded right rim is lost: the centroid lies left of the ball's
+    shares = faint_shares(mask, box, frame, wall, 1.0, CFG)
+    assert shares[1] > shares[0] + 0.3
+    sx, sy = rim_shift_px(shares, mask, CFG)
+    assert sx > 0.0  # towards the faint side
+    assert abs(seen[0] + sx - true[0]) < abs(seen[0] - true[0])
+    assert abs(sy) < 0.5 * sx  # top and bottom alike: no move along y to speak of
+    assert rim_shift_px(shares, mask, CFG, (False, True))[0] == 0.0  # a vehicle's flat face: not undone
+    # undone, the side's 1-σ is the spread left; not undone, the full one
+    assert rim_sigma_px(shares, CFG, (True, True))[0] < rim_sigma_px(shares, CFG)[0]
+    # both sides as faint: nothing to undo
+    assert rim_shift_px((0.5, 0.5, 0.2, 0.2), mask, CFG) == (0.0, 0.0)
 
 
 def test_the_localiser_takes_the_rims_sigma_in_place_of_the_fixed_one() -> None:

@@ -209,7 +209,9 @@ class SigmaTerms:
     whether its width and its height were seen whole (no side along that axis cut, nothing lost against
     the ground along y); known_person, a track seen whole as an upright body whose lower part a nearer
     background hides now (tracker.segmentation.ExtentHistory.seen_upright): a person whatever its top's
-    outline says (tracker.localize.Localizer.locate's upright)."""
+    outline says (tracker.localize.Localizer.locate's upright); rim_shift_px, how far (px, x and y) the true
+    silhouette's centroid lies from the outline's where a curved rim's faint sides lost a band
+    (tracker.rim_contrast.rim_shift_px), added to the centroid that is located."""
 
     disparity_px: float
     centroid_px: tuple[float, float]
@@ -219,6 +221,7 @@ class SigmaTerms:
     cut_px: tuple[float, float] = (0.0, 0.0)
     seen_whole: tuple[bool, bool] = (True, True)
     known_person: bool = False
+    rim_shift_px: tuple[float, float] = (0.0, 0.0)
 
 
 class SigmaSchedule:
