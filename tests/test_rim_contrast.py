@@ -190,3 +190,20 @@ def test_with_the_background_as_deep_as_the_object_its_rim_cannot_be_told_and_co
     left, right, cm, mask, box, rect = _stereo_disc(200.0, 200.0, d=14, d_bg=14)  # the ground at its feet
     res, tested = stereo_residual(left, right, box, mask, 14.0, cm, rect)
     assert tested.all() and min(faint_shares_of(mask, res, tested, CFG)) > 0.99
+
+
+def test_a_raw_shift_is_carried_into_rectified_pixels_by_the_local_jacobian() -> None:
+    rect = Rectifier(default_rig())
+    L = rect.rig.left
+
+    def rect_of(u: float, v: float) -> np.ndarray:  # through the lens model, not the map
+        ray = L.rays_rig(np.array([u]), np.array([v]))[0]
+        x, y, _ = rect.rig_to_rect((L.c + 10.0 * ray)[None, :])
+        return np.array([x[0], y[0]])
+
+    for at in ((320.4, 240.2), (12.3, 9.6), (630.5, 470.1)):
+        for shift in ((0.7, -0.4), (0.0, 1.2)):
+            want = rect_of(at[0] + shift[0], at[1] + shift[1]) - rect_of(*at)
+            got = rect.shift_to_rect(np.array(at), shift)
+            assert np.allclose(got, want, atol=0.01), (at, shift, got, want)
+    assert np.array_equal(rect.shift_to_rect(np.array([5.0, 5.0]), (0.0, 0.0)), np.zeros(2))

@@ -210,7 +210,7 @@ class Pipeline:
         in_frame = b.box[1] > 0 and b.box[3] < self.rig.left.size[1]  # its box reaches neither top nor bottom
         top = self._top_px(b) if terms.hidden_below and in_frame else None  # a body seen over what hides it
         swing, gait = self.headings.shares(track_id, frame.index, self.localizer.origin)
-        centre = b.centroid_rect + np.asarray(terms.rim_shift_px)  # the true silhouette's: faint sides' bands undone
+        centre = b.centroid_rect + self.rect.shift_to_rect(b.centroid_raw, terms.rim_shift_px)  # faint bands undone
         loc = self.localizer.locate(centre, b.disparity, max(b.disparity_sigma, terms.disparity_px),
                                     b.area, frame.gimbal, (cx, float(np.hypot(cy, jump))), (float(w), float(h)),
                                     terms.rim_px, in_frame, top, swing, True if terms.known_person else None,
