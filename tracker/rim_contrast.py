@@ -38,8 +38,10 @@ faint side loses, 1.06 % and 1.7 % of √(w h)). rms x error walk 0.548 -> 0.342
 0.249, occlusion's car 1.009 -> 1.010 (a vehicle's flat faces lose no such band: not undone for a wide
 body); along y approach 0.466 -> 0.189 px and manoeuvre 0.344 -> 0.141 (the balls), the walkers' 1.03-
 1.47 px by -4 to +4 % (a person's top and bottom are its head and feet: not undone for an upright
-body). Where it is undone, a side's 1-σ is `corrected_side_px` (1.4 px along x, 0.9 along y, the
-spread left; side_px elsewhere). `tmeye eval --all`: azimuth RMSE against the seen surface walk:body
+body). Where it is undone, a side's 1-σ is `corrected_side_px` (1.4 px along x, 0.9 along y; side_px
+elsewhere): the spread left, set by `tmeye eval --all` (along y 1.0 put manoeuvre:body's range within 1σ
+past its band, 1.2 its elevation NEES; 1.7 left manoeuvre's elevation 1-σ about 1.6 times too wide,
+NEES 0.40). `tmeye eval --all`: azimuth RMSE against the seen surface walk:body
 0.073 -> 0.061°, illumination 0.076 -> 0.063°, foliage 0.077 -> 0.066°, two-targets 0.033 -> 0.022°,
 approach 0.023 -> 0.025°; elevation approach 0.106 -> 0.065°, occlusion 0.052 -> 0.048°; against the
 volume centre approach's azimuth 0.035 -> 0.027° and elevation 0.051 -> 0.032°; the walkers'
