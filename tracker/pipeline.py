@@ -249,8 +249,12 @@ class Pipeline:
         along y for neither a wide nor an upright one (a person's top and bottom are its head and feet, whose
         losses tracker.segmentation's terms describe; undone, the walkers' y errors' rms moved by -4 to +4 %,
         the balls' by -59 %); (0, 0) where there is no 1-σ."""
+        if self.localizer.solid is None:
+            return None, (0.0, 0.0)
+        upright, wide = self._seen_as(b)
+        person |= upright
         model = self.subtractor.left_background(frame.gimbal)
-        if self.localizer.solid is None or (model is None and (person or self._seen_as(b)[0])):
+        if model is None and person:
             return None, (0.0, 0.0)
         if model is None:
             res, tested = stereo_residual(frame.left, frame.right, b.box, b.mask, b.disparity, cm, self.rect)
@@ -258,8 +262,7 @@ class Pipeline:
         else:
             gain = self.temporal.gain or b.gain
             shares = faint_shares(b.mask, b.box, frame.left, model[0], gain, self.rim_contrast)
-        upright, wide = self._seen_as(b)
-        corrected = (not wide, not (wide or upright or person))  # a curved rim's band (rim_contrast.rim_shift_px)
+        corrected = (not wide, not (wide or person))  # a curved rim's band (rim_contrast.rim_shift_px)
         return (rim_sigma_px(shares, self.rim_contrast, corrected),
                 rim_shift_px(shares, b.mask, self.rim_contrast, corrected))
 
