@@ -1,6 +1,7 @@
 """An outline grown into the pixels the temporal model sees changed (tracker.growth.grown_by_change): a part of
-the object that eq. (9) missed joins it, a shadow (the background's own texture, darker), a surface at
-another depth and a change not connected to the outline stay out."""
+the object that eq. (9) missed joins it, and so does a part beyond a gap the model saw no change in where on
+the whole the other camera shows it at the object's depth; a shadow (the background's own texture, darker),
+a surface at another depth and a change not connected to the outline stay out."""
 
 from __future__ import annotations
 
@@ -75,6 +76,41 @@ def test_a_change_not_connected_to_the_outline_stays_out() -> None:
     rng = np.random.default_rng(6)
     key[40:55, 55:70] = rng.normal(200.0, 15.0, (15, 15)).clip(0, 255).astype(np.uint8)  # something else
     out = grown_by_change(key, bg, key, _at_bg(bg), obj, _changed(key, bg), EPS)
+    assert np.array_equal(out, obj)
+
+
+def _beyond_a_gap(gap_rows: int, seed: int = 7) -> tuple[np.ndarray, ...]:
+    """_scene with the object's lower part 4 + gap_rows rows below its outline (the rows between show the
+    background: where the object's grey passed for the background's, the model saw no change) and the other
+    camera's image at the background's disparity that cannot tell, pixel by pixel, the object's depth from
+    the background's: 60 % of its pixels 1-2 grey levels off the key, 40 % 8 off (mean gap 4 > margin 2)."""
+    key, bg, obj = _scene()
+    key[30:30 + gap_rows, 20:40] = bg[30:30 + gap_rows, 20:40].astype(np.uint8)
+    rng = np.random.default_rng(seed)
+    off = np.where(rng.random(key.shape) < 0.6, rng.integers(1, 3, key.shape), 8) * rng.choice([-1, 1], key.shape)
+    at_bg = np.clip(key.astype(np.int16) + off, 0, 255).astype(np.uint8)
+    at_bg[:10] = _at_bg(bg)[:10]
+    return key, bg, obj, at_bg
+
+
+def test_a_part_the_model_saw_apart_joins_where_on_the_whole_it_is_at_the_objects_depth() -> None:
+    # a walker's legs below knees the model saw no change at, each pixel as like the background's disparity
+    key, bg, obj, at_bg = _beyond_a_gap(4)
+    out = grown_by_change(key, bg, key, at_bg, obj, _changed(key, bg), EPS)
+    assert np.count_nonzero(out[34:50, 20:40]) >= 0.95 * 16 * 20
+    assert not np.any(out[30:34])  # the gap itself stays as the model saw it
+    assert not np.any(out[:, :20]) and not np.any(out[:, 40:])
+
+
+def test_a_part_that_on_the_whole_is_at_the_backgrounds_depth_stays_out() -> None:
+    key, bg, obj, _ = _beyond_a_gap(4)
+    out = grown_by_change(key, bg, key, key, obj, _changed(key, bg), EPS)  # as like at either disparity
+    assert np.array_equal(out, obj)
+
+
+def test_a_part_further_than_the_reach_from_the_outline_stays_out() -> None:
+    key, bg, obj, at_bg = _beyond_a_gap(12)  # 13 px below it
+    out = grown_by_change(key, bg, key, at_bg, obj, _changed(key, bg), EPS)
     assert np.array_equal(out, obj)
 
 

@@ -70,11 +70,21 @@ def grown_by_change(key: U8, bg: NDArray[np.float32], other_at_d: U8, other_at_b
     neighbourhood is not the background's own texture relit (`local_corr` at most `max_corr`), nor is each
     connected part so added as a whole (`texture_corr`): a shadow by the object's feet lies at the ground's
     depth where it touches it, and background uncovered where the object stood long (its model unlearnt
-    meanwhile) at the object's depth where it stood close before it."""
+    meanwhile) at the object's depth where it stood close before it. Then whole parts of the changed pixels
+    join where pixel by pixel the other camera cannot tell the object's depth from the background's but on
+    the whole can (`_grown_by_parts`; endless:body, a walker's legs: elevation RMSE against the seen
+    surface approach:body 0.065 -> 0.015 deg, the ball's shaded lower limb)."""
     k = key.astype(np.int16)
     r_d = np.abs(k - other_at_d.astype(np.int16))
-    own = (r_d <= eps) & (np.abs(k - other_at_bg.astype(np.int16)) > r_d + margin)
-    cand = changed & own & ~obj
+    r_bg = np.abs(k - other_at_bg.astype(np.int16))
+    out = _grown_pixelwise(key, bg, obj, changed & (r_d <= eps) & (r_bg > r_d + margin), max_corr)
+    return _grown_by_parts(key, bg, out, changed, r_d <= eps, r_bg - r_d, margin, max_corr)
+
+
+def _grown_pixelwise(key: U8, bg: NDArray[np.float32], obj: BoolA, own: BoolA, max_corr: float) -> BoolA:
+    """`obj` grown by the pixels of `own` (changed, and the object's surface by the other camera) that are
+    not the background's texture relit, connected to it (grown_by_change)."""
+    cand = own & ~obj
     if not cand.any():
         return obj
     ys, xs = np.nonzero(cand)  # the windows about the candidates only
@@ -93,6 +103,51 @@ def grown_by_change(key: U8, bg: NDArray[np.float32], other_at_d: U8, other_at_b
     keep = _parts_corr(key, bg, parts, n_add) <= max_corr
     keep[0] = False
     return np.asarray(obj | keep[parts])
+
+
+def _grown_by_parts(key: U8, bg: NDArray[np.float32], obj: BoolA, changed: BoolA, at_d: BoolA,
+                    gap: NDArray[np.int16], margin: int, max_corr: float, min_share: float = 0.5) -> BoolA:
+    """`obj` grown by whole parts of the changed pixels next to it that the other camera shows at the object's
+    disparity though pixel by pixel it cannot tell that from the background's: a smooth surface seen
+    against itself a few pixels off (a walker's leg, 12 px wide, over the ground it stands on, whose
+    disparity is 5 px off its own). A part: the changed pixels not in `obj` that a closing (5 x 5) joins,
+    as the temporal model leaves gaps of a few pixels where the object's grey passes for the background's;
+    it joins where it touches `obj`, most of it (min_share) is at the object's depth (`at_d`: |Γ - Θ_d| <=
+    ε), the other camera shows it at the object's disparity better than at the background's on the whole,
+    by more than `margin` grey levels a pixel (mean of gap = |Γ - Θ_bg| - |Γ - Θ_d|: uncovered background
+    and a shadow on the ground match at the background's as well or better), and its texture is not the
+    background's relit (texture_corr at most max_corr)."""
+    rest = changed & ~obj
+    if not rest.any():
+        return obj
+    closed = cv2.morphologyEx(rest.view(np.uint8), cv2.MORPH_CLOSE, _CLOSE)
+    n, labels = cv2.connectedComponents(closed, connectivity=8)
+    lab = np.where(rest, np.asarray(labels, np.int32), np.int32(0))
+    flat = lab.ravel()
+    cnt = np.maximum(np.bincount(flat, minlength=n), 1)
+    share = np.bincount(flat, at_d.ravel().astype(np.float64), n) / cnt
+    mean_gap = np.bincount(flat, gap.ravel().astype(np.float64), n) / cnt
+    fit = (share >= min_share) & (mean_gap > margin)
+    fit[0] = False
+    if not fit.any():
+        return obj
+    fit &= _parts_corr(key, bg, lab, n) <= max_corr
+    out, taken = obj.copy(), np.zeros(n, bool)
+    for _ in range(_ROUNDS):  # parts within _REACH of the outline, then of what joined
+        near = np.zeros(n, bool)
+        near[np.unique(lab[cv2.dilate(out.view(np.uint8), _REACH).view(bool)])] = True
+        new = fit & near & ~taken
+        if not new.any():
+            break
+        taken |= new
+        out |= new[lab]
+    return out
+
+
+_CLOSE = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
+# a part joins within 8 px of the outline (a walker's knees where the model saw no change), in up to 4 rounds
+_REACH = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (17, 17))
+_ROUNDS = 4
 
 
 def _parts_corr(key: U8, bg: NDArray[np.float32], parts: NDArray[np.int32], n: int) -> NDArray[np.float64]:

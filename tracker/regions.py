@@ -54,13 +54,28 @@ def row_thirds(obj: BoolA) -> Iterator[BoolA]:
             yield part
 
 
-def hints_inside(hints: F64 | None, region: BoolA, box: Box) -> list[F64]:
-    """The predicted tracks (rows (x, y, disparity), raw left pixels) whose position lies in the region."""
+def hints_inside(hints: F64 | None, region: BoolA, box: Box, reach_px: int = 0) -> list[F64]:
+    """The predicted tracks (rows (x, y, disparity), raw left pixels) whose position lies in the region, or
+    within reach_px of one of its pixels (a disc)."""
     if hints is None or len(hints) == 0:
         return []
     x0, y0 = box[0], box[1]
-    return [h for h in hints if 0 <= int(h[1]) - y0 < region.shape[0] and 0 <= int(h[0]) - x0 < region.shape[1]
-            and region[int(h[1]) - y0, int(h[0]) - x0]]
+    h, w = region.shape
+    r = reach_px
+    out = []
+    for hint in hints:
+        x, y = int(hint[0]) - x0, int(hint[1]) - y0
+        if not (-r <= x < w + r and -r <= y < h + r):
+            continue
+        if r == 0:
+            if region[y, x]:
+                out.append(hint)
+            continue
+        ya, yb, xa, xb = max(y - r, 0), min(y + r + 1, h), max(x - r, 0), min(x + r + 1, w)
+        ys, xs = np.nonzero(region[ya:yb, xa:xb])
+        if xs.size and bool(np.any((xs + xa - x) ** 2 + (ys + ya - y) ** 2 <= r * r)):
+            out.append(hint)
+    return out
 
 
 def hints_around(hints: F64 | None, region: BoolA, box: Box) -> list[float]:
@@ -74,13 +89,14 @@ def hints_around(hints: F64 | None, region: BoolA, box: Box) -> list[float]:
     return [float(h[2]) for h in hints if x0 <= h[0] < x0 + bw and y0 <= h[1] < y0 + bh]
 
 
-def nearest_hint(hints: F64 | None, region: BoolA, box: Box) -> float | None:
-    """The disparity of the predicted track nearest to the region's centre, if one lies inside it."""
+def nearest_hint(hints: F64 | None, region: BoolA, box: Box, reach_px: int = 0) -> float | None:
+    """The disparity of the predicted track nearest to the region's centre, if one lies inside it (or within
+    reach_px of its pixels: hints_inside)."""
     ys, xs = np.nonzero(region)
     if xs.size == 0:
         return None
     x0, y0 = box[0], box[1]
-    inside = hints_inside(hints, region, box)
+    inside = hints_inside(hints, region, box, reach_px)
     if not inside:
         return None
     c = np.array([xs.mean() + x0, ys.mean() + y0])

@@ -55,6 +55,9 @@ _SEARCH_RADIUS = 4  # px about a disparity that refining from failed to match (V
 _ONE = OneCameraConfig()  # its depth_tol_px and cover_px: what a nearer background hides from the right camera
 
 
+_REACH_PX = 4  # a track's predicted centroid in a gap of the key mask's region (an arm's, a crack) still names it
+
+
 def _part_of(found: list[Blob], region: BoolA, area: int, min_part_px: int) -> Blob | None:
     """The object found before of which a region too small to be a second object lies where a part of
     its body would (split.same_body at the object's own disparity), or None (or when under min_part_px)."""
@@ -122,7 +125,7 @@ class Verifier:
                 tries -= 1
             else:
                 part_tries -= 1
-            hint = part_of.disparity if part_of is not None else nearest_hint(hints, m_left, box)
+            hint = part_of.disparity if part_of is not None else nearest_hint(hints, m_left, box, _REACH_PX)
             around = hints_around(hints, m_left, box)
             if hint is None and len(around) == 1 and _at_left_border(m_left, box, around[0]):
                 hint = around[0]  # one track predicted past the region's edge (a car split by a post)
