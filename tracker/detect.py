@@ -20,6 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tracker.bgdepth import BackgroundDepth, CorrespondenceMap
+from tracker.boxes import stacked_joined
 from tracker.frames import GimbalState, StereoFrame, check_pair
 from tracker.masks import change, strict_limit
 
@@ -342,7 +343,7 @@ class StereoSubtractor:
             out.append((max(x * s - m, 0), max(y * s - m, 0), min((x + bw) * s + m, w),
                         min((y + bh) * s + m, h)))
             cells.append(cv2.countNonZero(fg[y:y + bh, x:x + bw]))
-        return tuple(out), tuple(cells)
+        return stacked_joined(out, cells)
 
     def foreground_low(self, masks: list[tuple[Box, NDArray[np.bool_]]]) -> U8 | None:
         """The verified objects' masks (box, mask over it) at the floor's low resolution (the stride's grid
