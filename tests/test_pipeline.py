@@ -54,7 +54,7 @@ def test_a_track_predicted_past_infinity_is_verified_as_a_new_object() -> None:
         res = pipe.step(sim.step().frame)
     assert res.primary is not None
     x, y = res.primary.blob.centroid_raw
-    pipe.tracker.predictions = lambda t: (np.array([[x, y, -4.2], [x, y, np.nan]]), [1, 2])  # type: ignore[method-assign]
+    pipe.tracker.predictions = lambda t: np.array([[x, y, -4.2], [x, y, np.nan]])  # type: ignore[method-assign]
     res = pipe.step(sim.step().frame)
     assert len(res.detections) == 1
 

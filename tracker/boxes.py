@@ -2,9 +2,6 @@
 
 from __future__ import annotations
 
-import numpy as np
-from numpy.typing import NDArray
-
 Box = tuple[int, int, int, int]  # raw left pixels: x0, y0, x1, y1
 
 
@@ -36,44 +33,3 @@ def stacked_joined(boxes: list[Box], cells: list[int]) -> tuple[tuple[Box, ...],
             n[i] += n.pop(j)
             joined = True
     return tuple(out), tuple(n)
-
-
-class TrackSpans:
-    """How far each track's outline reached above and below its centroid over its last `frames` frames, per
-    unit disparity (a body's height in the image scales with d), to widen the candidate box its predicted
-    centroid lies in along y (`widened`): eq. (9) may fire on a standing walker's torso only, its legs over
-    ground at nearly their depth, and the temporal model and the outline's growth (tracker.growth) see no
-    further than the box."""
-
-    def __init__(self, frames: int = 15):
-        self.frames = frames
-        self._kept: dict[int, list[tuple[float, float]]] = {}
-
-    def keep(self, track_id: int, box: Box, mask: NDArray[np.bool_], cy: float, d: float) -> None:
-        """Add a track's outline this frame: its mask over box (raw left px), its centroid's row cy, its d."""
-        rows = np.flatnonzero(mask.any(axis=1))
-        if d <= 0 or rows.size == 0:
-            return
-        seen = self._kept.setdefault(track_id, [])
-        seen.append(((cy - box[1] - int(rows[0])) / d, (box[1] + int(rows[-1]) + 1 - cy) / d))
-        del seen[:-self.frames]
-
-    def keep_only(self, track_ids: list[int]) -> None:
-        self._kept = {k: v for k, v in self._kept.items() if k in track_ids}
-
-    def widened(self, boxes: tuple[Box, ...], hints: NDArray[np.float64], ids: list[int], height: int,
-                margin_px: int) -> tuple[Box, ...]:
-        """Each box that holds a track's predicted centroid (hints: (N, 3) x, y, d, raw left px; ids: their
-        tracks) reaching over the rows that track's outline reached lately (the most above and below its
-        centroid, times the predicted d), plus margin_px, within the image's `height`."""
-        out = []
-        for x0, y0, x1, y1 in boxes:
-            for (x, y, d), k in zip(hints, ids, strict=True):
-                seen = self._kept.get(k)
-                if not seen or not (x0 <= x < x1 and y0 <= y < y1):
-                    continue
-                up, down = max(s[0] for s in seen), max(s[1] for s in seen)
-                y0 = max(min(y0, int(np.floor(y - up * d)) - margin_px), 0)
-                y1 = min(max(y1, int(np.ceil(y + down * d)) + margin_px + 1), height)
-            out.append((x0, y0, x1, y1))
-        return tuple(out)

@@ -17,7 +17,6 @@ from numpy.typing import NDArray
 
 from tracker.bgdepth import BackgroundDepth, CorrespondenceMap
 from tracker.bglearn import LearntBackground, Sighting, StreamLearnConfig, StreamLearner, changed_box
-from tracker.boxes import TrackSpans
 from tracker.detect import Box, DetectorConfig, StereoSubtractor
 from tracker.disparity_sigma import parts_sigma
 from tracker.egomotion import PoseCompensation
@@ -95,7 +94,6 @@ class Pipeline:
         self.heights = HeightHistory()
         self.extents = ExtentHistory()
         self.headings = HeadingHistory()
-        self.spans = TrackSpans()  # widens a tracked body's candidate box over its recent rows
         self.visibility, self.outline, self.rim_contrast = VisibilityConfig(), OutlineConfig(), RimContrastConfig()
         self._last_gain = 1.0
         # the last frame, its objects, their track ids, its tracks' hints and all it was verified with
@@ -144,14 +142,11 @@ class Pipeline:
         t0 = time.perf_counter()
         cands = self.subtractor.step(frame)
         t1 = time.perf_counter()
-        predicted, hint_ids = self.tracker.predictions(frame.t)
-        hints = self.ego.from_home(predicted, frame.gimbal)  # at this frame's pose
+        hints = self.ego.from_home(self.tracker.predictions(frame.t), frame.gimbal)  # at this frame's pose
         # a track receding fast may be predicted past infinity (disparity <= 0): that narrows no search
-        ok = np.isfinite(hints).all(axis=1) & (hints[:, 2] > 0)
-        hints, hint_ids = hints[ok], [k for k, o in zip(hint_ids, ok, strict=True) if o]
+        hints = hints[np.isfinite(hints).all(axis=1) & (hints[:, 2] > 0)]
         seek = self._with_found(hints, frame)  # and the new objects found between frames
-        boxes = self.spans.widened(cands.worth_verifying(self.subtractor.cfg.moving_min_cells, seek), hints,
-                                   hint_ids, frame.left.shape[0], self.subtractor.cfg.margin_px)
+        boxes = cands.worth_verifying(self.subtractor.cfg.moving_min_cells, seek)
         blobs, deferred = self.schedule.run(boxes, seek, lambda box, may_search: self.verifier.verify_all(
             frame, box, seek, may_search=may_search), t0)
         blobs = join_parts(without_duplicates(blobs), self.rect.area_moments)  # one object again, or a part
@@ -164,10 +159,8 @@ class Pipeline:
         # from centroids and disparities alone (not their σ), as seen at home: the mount's turning taken out
         sigma_d, alone = np.array([b.disparity_sigma for b in blobs]), np.array([b.one_camera for b in blobs], bool)
         ids = self.tracker.update(frame.t, self.ego.to_home(obs, frame.gimbal), sigma_d, alone)
-        for kept in (self.sigma_schedule, self.heights, self.extents, self.headings, self.spans):
+        for kept in (self.sigma_schedule, self.heights, self.extents, self.headings):
             kept.keep_only([tr.track_id for tr in self.tracker.tracks])
-        for blob, i in zip(blobs, ids, strict=True):
-            self.spans.keep(i, blob.box, blob.mask, float(blob.centroid_raw[1]), blob.disparity)
         t_ids = time.perf_counter()
         locs = [self._locate(frame, b, blobs, i, t0) for b, i in zip(blobs, ids, strict=True)]
         self._done = (frame, blobs, ids, hints, seek)  # for `between_frames`

@@ -142,11 +142,9 @@ class MultiTracker:
             return
         self.primary_id = min(alive) if alive else None
 
-    def predictions(self, t: float) -> tuple[F64, list[int]]:
-        """Predicted (x, y, disparity) at time t of the tracks seen in the last few frames, (N, 3), and their
-        track ids."""
-        seen = [tr for tr in self.tracks if tr.missed <= 2]
-        return np.array([tr.predict(t) for tr in seen]).reshape(-1, 3), [tr.track_id for tr in seen]
+    def predictions(self, t: float) -> F64:
+        """Predicted (x, y, disparity) at time t of the tracks seen in the last few frames, (N, 3)."""
+        return np.array([tr.predict(t) for tr in self.tracks if tr.missed <= 2]).reshape(-1, 3)
 
     def coasting(self, t: float, max_missed: int) -> F64:
         """The confirmed tracks a sighting by the left camera alone may continue (tracker.one_camera), those
