@@ -112,7 +112,8 @@ def _grown_by_parts(key: U8, bg: NDArray[np.float32], obj: BoolA, changed: BoolA
     against itself a few pixels off (a walker's leg, 12 px wide, over the ground it stands on, whose
     disparity is 5 px off its own). A part: the changed pixels not in `obj` that a closing (5 x 5) joins,
     as the temporal model leaves gaps of a few pixels where the object's grey passes for the background's;
-    it joins where it touches `obj`, most of it (min_share) is at the object's depth (`at_d`: |Γ - Θ_d| <=
+    it joins where it lies within 8 px of `obj` or of a part joined before (up to 4 rounds: the next part
+    down a leg), most of it (min_share) is at the object's depth (`at_d`: |Γ - Θ_d| <=
     ε), the other camera shows it at the object's disparity better than at the background's on the whole,
     by more than `margin` grey levels a pixel (mean of gap = |Γ - Θ_bg| - |Γ - Θ_d|: uncovered background
     and a shadow on the ground match at the background's as well or better), and its texture is not the
