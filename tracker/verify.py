@@ -34,7 +34,15 @@ from tracker.masks import (
 )
 from tracker.one_camera import OneCameraConfig, seen_by_right
 from tracker.rectify import Rectifier
-from tracker.regions import background_disparity, hints_around, mask_centroid, nearest_hint, row_thirds
+from tracker.regions import (
+    background_disparity,
+    hints_around,
+    in_front,
+    mask_centroid,
+    median_behind,
+    nearest_hint,
+    row_thirds,
+)
 from tracker.results import Blob
 from tracker.rim import DEFAULT_RIM, RimConfig, RimRecovery
 from tracker.split import join, own_pixels, same_body
@@ -200,7 +208,7 @@ class Verifier:
         area, c_box = mask_centroid(m8)
         c_raw = c_box + (x0, y0)  # eq. (10), c(i, j) = the object mask
         d_bg = background_disparity(cm, obj, c_raw - (x0, y0))
-        if fine.disparity < d_bg * (1.0 + cfg.min_depth_gap) + cfg.min_disparity_gap_px:
+        if not in_front(fine.disparity, (d_bg, median_behind(cm, obj)), cfg.min_depth_gap, cfg.min_disparity_gap_px):
             return None  # not in front of the background: a misregistered background patch
         # eq. (10) in rectified coordinates, pixels weighted by their area: Σ a x / Σ a, Σ a y / Σ a
         sx, sy, sa, _ = cv2.mean(self.rect.area_moments[y0:y1, x0:x1], mask=m8)
