@@ -26,19 +26,21 @@ def test_a_walker_whose_map_is_wrong_behind_its_centre_is_in_front_by_the_median
     obj = np.ones((40, 10), bool)
     behind = median_behind(_map(d_map), obj)
     assert behind == 7.5
-    assert not in_front(28.0, (30.0,), GAP, GAP_PX)
-    assert in_front(28.0, (30.0, behind), GAP, GAP_PX)
+    assert not in_front(28.0, 30.0, GAP, GAP_PX)
+    assert in_front(28.0, behind, GAP, GAP_PX)
 
 
 def test_a_patch_at_its_backgrounds_disparity_is_behind_by_both() -> None:
     d_map = np.full((20, 20), 12.0)
     obj = np.zeros((20, 20), bool)
     obj[5:15, 5:15] = True
-    assert not in_front(12.2, (12.0, median_behind(_map(d_map), obj)), GAP, GAP_PX)
+    assert not in_front(12.2, 12.0, GAP, GAP_PX)
+    assert not in_front(12.2, median_behind(_map(d_map), obj), GAP, GAP_PX)
 
 
 def test_an_unknown_background_gives_no_test() -> None:
     cm = _map(np.full((5, 5), 9.0))
     cm.valid[:] = False
     assert median_behind(cm, np.ones((5, 5), bool)) == 0.0
-    assert in_front(0.6, (0.0, 0.0), GAP, GAP_PX)
+    assert median_behind(cm, np.ones((5, 5), bool), default=9.5) == 9.5
+    assert in_front(0.6, 0.0, GAP, GAP_PX)

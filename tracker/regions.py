@@ -40,21 +40,17 @@ def background_disparity(cm: CorrespondenceMap, obj: BoolA, c: F64) -> float:
     return float(cm.disparity[ys[k], xs[k]])
 
 
-def median_behind(cm: CorrespondenceMap, obj: BoolA) -> float:
-    """The median of the known background's disparity (px) over the object's pixels (0: none known)."""
+def median_behind(cm: CorrespondenceMap, obj: BoolA, default: float = 0.0) -> float:
+    """The median of the known background's disparity (px) over the object's pixels (`default` where none is
+    known)."""
     d = cm.disparity[obj & cm.valid]
-    return float(np.median(d)) if d.size else 0.0
+    return float(np.median(d)) if d.size else default
 
 
-def in_front(d: float, behind: tuple[float, ...], gap: float, gap_px: float) -> bool:
-    """Whether disparity d (px) lies in front of one of the background disparities `behind` (px) by the
-    depth-gap test, d >= d_bg (1 + gap) + gap_px: the background right behind the object's centre, and the
-    median behind all its pixels. The learnt background may be wrong behind the centre alone: SGBM carries
-    a post's or a board's disparity along the rows into a smooth ground (endless:body, a walker standing
-    on ground at 11-25 px of disparity that the map gave as 30 px, was refused as behind it: its elevation
-    error against its seen surface 0.744 -> 0.630 deg rms with the median too). A background patch
-    misregistered lies at its own background's disparity by both."""
-    return any(d >= b * (1.0 + gap) + gap_px for b in behind)
+def in_front(d: float, d_bg: float, gap: float, gap_px: float) -> bool:
+    """Whether disparity d (px) lies in front of the background's d_bg (px) by the depth-gap test,
+    d >= d_bg (1 + gap) + gap_px."""
+    return d >= d_bg * (1.0 + gap) + gap_px
 
 
 def row_thirds(obj: BoolA) -> Iterator[BoolA]:

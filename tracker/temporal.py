@@ -39,7 +39,7 @@ from tracker.frames import StereoFrame
 from tracker.masks import largest_region, temporal_outline
 from tracker.one_camera import OneCameraConfig, coast_sigma_px, hidden_from_right, nearest_prediction
 from tracker.rectify import Rectifier
-from tracker.regions import background_disparity, mask_centroid, nearest_hint
+from tracker.regions import background_disparity, mask_centroid, median_behind, nearest_hint
 from tracker.results import Blob
 from tracker.stereo import RegionMatch
 from tracker.verify import Verifier
@@ -297,8 +297,7 @@ class TemporalDetector:
             fine = again
         cm = self.sub.correspondence(0, frame.gimbal, box)
         d_bg = background_disparity(cm, obj, mask_centroid(obj.view(np.uint8))[1])
-        known = obj & cm.valid
-        d_med = float(np.median(cm.disparity[known])) if np.any(known) else d_bg
+        d_med = median_behind(cm, obj, d_bg)
         if fine.disparity < d_med - max(cfg.behind_tolerance_px, 3.0 * fine.sigma):
             return None  # behind the known background: background uncovered, not an object
         # clear of the background (the median the test above takes), yet the right camera sees nothing

@@ -208,7 +208,12 @@ class Verifier:
         area, c_box = mask_centroid(m8)
         c_raw = c_box + (x0, y0)  # eq. (10), c(i, j) = the object mask
         d_bg = background_disparity(cm, obj, c_raw - (x0, y0))
-        if not in_front(fine.disparity, (d_bg, median_behind(cm, obj)), cfg.min_depth_gap, cfg.min_disparity_gap_px):
+        # in front of the background behind its centre, or else of the median behind all its pixels: the map
+        # may be wrong behind the centre alone (SGBM carries a post's disparity into a smooth ground; endless:
+        # body, elevation 0.744 -> 0.630 deg); a misregistered background patch lies at its own by both
+        gap, gap_px = cfg.min_depth_gap, cfg.min_disparity_gap_px
+        if not (in_front(fine.disparity, d_bg, gap, gap_px)
+                or in_front(fine.disparity, median_behind(cm, obj), gap, gap_px)):
             return None  # not in front of the background: a misregistered background patch
         # eq. (10) in rectified coordinates, pixels weighted by their area: Σ a x / Σ a, Σ a y / Σ a
         sx, sy, sa, _ = cv2.mean(self.rect.area_moments[y0:y1, x0:x1], mask=m8)
