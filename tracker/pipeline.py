@@ -330,7 +330,7 @@ class Pipeline:
         3.02 there."""
         others = [e for o in blobs if o is not b for e in object_and_shadow(o.box, o.mask, o.disparity, o.bg_disparity)]
         upright, wide = self._seen_as(b)
-        hidden_below, cut, whole = self._partly_seen(b, others, upright, ring)
+        hidden_below, cut, whole = self._partly_seen(b, others, upright, ring, self._level_from(b, track_id))
         solid = self.localizer.solid  # a person whose top alone shows now: its track showed it whole
         known = hidden_below and not upright and solid is not None and track_id is not None and \
             self.extents.seen_upright(track_id, solid.upright_aspect)
@@ -346,7 +346,8 @@ class Pipeline:
         return (px, py), gap_x, hidden_below, cut, whole, known
 
     def _partly_seen(self, b: Blob, others: list[tuple[Box, BoolA, float]], upright: bool,
-                     ring: tuple[BoolA, Box, CorrespondenceMap]) -> tuple[bool, tuple[float, float], tuple[bool, bool]]:
+                     ring: tuple[BoolA, Box, CorrespondenceMap], level_from: float | None = None
+                     ) -> tuple[bool, tuple[float, float], tuple[bool, bool]]:
         """Whether a nearer background cuts the blob's bottom and nothing its top, and the centroid's
         extra 1-σ (px, x and y) where the blob is cut by the image border, by another object found this
         frame (others: box, mask, disparity) or by a nearer background (the cameras moving, too: pan:body
@@ -365,7 +366,7 @@ class Pipeline:
         objects = painted(box, others)
         seen = cuts(mask[:n], (box[0], box[1], box[2], box[1] + n), self.rig.left.size, b.disparity,
                     None if disp is None else disp[:n], None if valid is None else valid[:n], self.visibility,
-                    None if objects is None else objects[:n])
+                    None if objects is None else objects[:n], level_from)
         sx, sy = seen.skew
         tall = occluder_below(mask, b.disparity, disp, valid, self.visibility) if seen.bottom_by_background else None
         px, py = cut_sigma_px(b.mask, seen, self.visibility, tall)
@@ -377,6 +378,12 @@ class Pipeline:
         whole = (not (left or right) and ux == 0.0, not (top or bottom) and uy == 0.0)
         cut = (float(np.sqrt(px * px + sx * sx + ux * ux)), float(np.sqrt(py * py + sy * sy + uy * uy)))
         return hidden_below, cut, whole
+
+    def _level_from(self, b: Blob, track_id: int | None) -> float | None:
+        """The disparity (px) a background is judged level with the blob from (tracker.visibility.cuts): its
+        track's held disparity (MultiTracker.held_disparity) where farther than its own, else None."""
+        held = self.tracker.held_disparity(track_id)
+        return held if held is not None and held < b.disparity else None
 
     def _seen_as(self, b: Blob) -> tuple[bool, bool]:
         """Whether the blob is an upright body and whether a wide one, by the SolidPrior (its outline's

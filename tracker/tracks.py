@@ -161,6 +161,12 @@ class MultiTracker:
                 rows.append([*tr.predict(t)[:2], d, tr.since_stereo, sigma, t - t_seen])
         return np.array(rows, np.float64).reshape(-1, 6)
 
+    def held_disparity(self, track_id: int | None) -> float | None:
+        """The disparity (px) a track holds from its last STEREO_KEPT stereo sightings, their median (as
+        `coasting`); None for no such track or one without a stereo sighting."""
+        tr = None if track_id is None else self.get(track_id)
+        return None if tr is None or not tr.stereo else _held(tr.stereo)[0]
+
     def get(self, track_id: int) -> Track | None:
         return next((tr for tr in self.tracks if tr.track_id == track_id), None)
 

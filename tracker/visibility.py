@@ -107,7 +107,7 @@ def cut_and_skew(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, i
 
 def cuts(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, int], disparity: float,
          bg_disparity: F32 | None, bg_valid: BoolA | None, cfg: VisibilityConfig,
-         objects: BoolA | None = None) -> Cuts:
+         objects: BoolA | None = None, level_from: float | None = None) -> Cuts:
     """The sides `cut_sides` counts, and how far (px, x and y) the centroid may move across the sides cut by a
     nearer or level background, which need not hide the target evenly: a board behind a bush's round top loses
     its lower left corner, and its centroid moves right, along x, though only its bottom side is cut (endless,
@@ -123,7 +123,14 @@ def cuts(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, int], dis
     shadow band count as they are. On the left and right sides the learnt map is too often wrong for that
     test: a nearer post's disparity runs on over the band left of it that the right camera does not see
     (occlusion, frame 65: 13 px, the post's disparity less the wall's), so that the background behind a
-    target emerging there reads as near as the post itself."""
+    target emerging there reads as near as the post itself.
+
+    level_from: the disparity (px) the level test starts from where not the target's own: its track's held
+    disparity where farther (`Pipeline._level_from`). A far target's disparity jumps by a few tenths of a
+    pixel from one frame to the next (endless:body, a walker's head and shoulders over a hedge at 25 m:
+    7.2-7.4 px, then 7.66 and 7.70), and the hedge just behind it, level by the track's disparities, was
+    taken for a background behind it in those frames: the body placed from its outline's centroid, 11 px
+    too high, with a 1-σ of 0.4 px (frame 913, its elevation error 26 σ)."""
     x0, y0, _, _ = box
     w, h = size
     m8 = mask.view(np.uint8)
@@ -141,7 +148,7 @@ def cuts(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, int], dis
     edge = sides(mask & (cv2.erode(m8, _RING) == 0), centre, half)  # the outline's own 2-px rim
     nearer = bg_valid & (bg_disparity > disparity + cfg.nearer_px)
     hidden = right_shadow(nearer, bg_disparity, disparity)
-    level = bg_valid & (bg_disparity > disparity - cfg.level_px)
+    level = bg_valid & (bg_disparity > (disparity if level_from is None else level_from) - cfg.level_px)
     behind = bg_valid & (bg_disparity < disparity - cfg.jump_px)
     by_bg = [False] * 4
     hiding = np.zeros_like(ring_px)  # the ring pixels beyond which the target may go on unseen
