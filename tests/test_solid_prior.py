@@ -173,6 +173,24 @@ def test_an_upright_bodys_azimuth_sigma_grows_with_the_share_of_its_swing_seen_a
     assert prior.upright_x_var(h, 0.0, 0.5) == pytest.approx(h * h * (a0**2 + 0.25 * (a**2 - a0**2)))
 
 
+def test_a_standing_upright_bodys_elevation_sigma_is_the_still_share_of_its_height() -> None:
+    # h (σ0² + (σ² - σ0²) √m)^½ about its shift along y: m = 0 standing, 1 (or unknown) walking
+    prior = SolidPrior(upright_sigma=0.028, upright_still_y_sigma=0.0127)
+    h = 150.0
+    assert prior.upright_y_sigma(h, 0.0) == pytest.approx(h * 0.0127)
+    assert prior.upright_y_sigma(h, 1.0) == pytest.approx(h * 0.028) == prior.upright_y_sigma(h)
+    assert prior.upright_y_sigma(h, 0.25) == pytest.approx(h * math.sqrt(0.0127**2 + 0.5 * (0.028**2 - 0.0127**2)))
+    assert SolidPrior(upright_sigma=0.0).upright_y_sigma(h, 0.0) == 0.0  # never more than the walking one
+    # in the localisation: a person seen whole, not cut, standing has the smaller elevation 1-σ
+    rect = Rectifier(default_rig())
+    base = (np.array([380.0, 200.0]), 12.0, 0.05, 400, None, (0.0, 0.0), (40.0, h), (0.2, 0.2), True, None, 0.5)
+
+    def sigma_phi(gait: float | None) -> float:
+        return Localizer(rect, solid=prior).locate(*base, None, None, gait).sigma_phi
+
+    assert sigma_phi(0.0) < 0.6 * sigma_phi(1.0) and sigma_phi(None) == pytest.approx(sigma_phi(1.0))
+
+
 def test_a_wide_body_has_its_own_depth_prior() -> None:
     # a vehicle side-on (width >= 2 x height): ρ = wide_ratio ± wide_ratio_sigma of its seen height (its
     # smaller extent); just under the aspect, the general ρ ± σ_ρ

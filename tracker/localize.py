@@ -136,9 +136,9 @@ class Localizer:
             s_rim = self.solid.rim_sigma_px / np.sqrt(2.0)  # the outline's sides on a curved, shaded rim
             rx, ry = (s_rim, s_rim) if rim_px is None else rim_px
             w, h = extent_px
-            s_up = self.solid.upright_sigma * h if upright else 0.0
+            whole = gait if from_top is None else None  # the still share: of standing bodies seen whole
+            s_up = self.solid.upright_y_sigma(h, whole) if upright else 0.0
             if upright:  # x: its limbs and, while the cameras move (no rim contrast), the rim too
-                whole = gait if from_top is None else None  # the still share: of standing bodies seen whole
                 S[0, 0] += self.solid.upright_x_var(h, swing, whole) + (rx**2 if rim_px is None else 0.0)
             else:  # x: the rim
                 S[0, 0] += rx**2
