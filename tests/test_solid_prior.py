@@ -191,6 +191,15 @@ def test_a_standing_upright_bodys_elevation_sigma_is_the_still_share_of_its_heig
     assert sigma_phi(0.0) < 0.6 * sigma_phi(1.0) and sigma_phi(None) == pytest.approx(sigma_phi(1.0))
 
 
+def test_an_outline_short_of_a_persons_stature_at_its_disparity_says_by_how_much() -> None:
+    # height_m d / b - h: a walker entering at the image's side, 46 px of the 125 a 1.7 m person shows at
+    # 22 px of disparity on a 0.3 m baseline (endless:body frame 1546)
+    prior = SolidPrior(height_m=1.7)
+    assert prior.short_of_stature_px(46.0, 22.0, 0.3) == pytest.approx(1.7 * 22.0 / 0.3 - 46.0)
+    assert prior.short_of_stature_px(130.0, 22.0, 0.3) == 0.0  # seen whole: nothing short
+    assert prior.short_of_stature_px(46.0, 22.0, 0.0) == 0.0
+
+
 def test_a_wide_body_has_its_own_depth_prior() -> None:
     # a vehicle side-on (width >= 2 x height): ρ = wide_ratio ± wide_ratio_sigma of its seen height (its
     # smaller extent); just under the aspect, the general ρ ± σ_ρ

@@ -197,6 +197,12 @@ class SolidPrior:
         s, s0 = self.upright_sigma, min(self.upright_still_y_sigma, self.upright_sigma)
         return height_px * float(np.sqrt(s0**2 + (s**2 - s0**2) * weight))
 
+    def short_of_stature_px(self, height_px: float, disparity: float, baseline_m: float) -> float:
+        """How much shorter (px) an upright outline height_px high is than a person of height_m at its
+        disparity (px; rectified, baseline_m the rig's baseline): height_m d / b - h, at least 0. Seen only in
+        part at a side (a walker entering the image), the rest of the person may lie above or below it."""
+        return max(self.height_m * disparity / baseline_m - height_px, 0.0) if baseline_m > 0 else 0.0
+
     def wide(self, width_px: float, height_px: float) -> bool:
         """Whether a target seen width_px wide and height_px high is a wide body (a vehicle side-on)."""
         return width_px > 0 and width_px >= self.wide_aspect * height_px
