@@ -3,7 +3,7 @@ function of the report, True where a line is met, False where it is missed, None
 
 from __future__ import annotations
 
-from tmeye.eval_all import checks, summary_lines
+from tmeye.eval_all import by_chance, checks, summary_lines
 
 BODY = {
     "detection_rate": 0.995, "false_target_frames": 0, "azimuth_surface_rmse_wide_deg": 0.019,
@@ -41,4 +41,21 @@ def test_the_summary_names_each_missed_line() -> None:
     lines = summary_lines({"checks": table, "met": flat.count(True), "missed": flat.count(False), "no_frames": 0})
     assert lines[0].startswith("walk:body") and "elevation_nees in 0.7-1.5" in lines[0]
     assert "azimuth_within_1sigma in 0.60-0.75" in lines[1] and "range_nees" not in lines[1]
-    assert lines[-1] == f"met {flat.count(True)}, missed {flat.count(False)}, no frames 0"
+    assert lines[-1] == f"met {flat.count(True)}, missed {flat.count(False)} (0 of them 1-σ lines within chance of " \
+        "their band), no frames 0"
+
+
+def test_a_sigma_miss_is_by_chance_only_where_its_interval_reaches_the_band() -> None:
+    rep = {**BODY, "azimuth_within_1sigma_p05": 0.50, "azimuth_within_1sigma_p95": 0.65,  # reaches 0.60
+           "elevation_nees_p05": 1.52, "elevation_nees_p95": 2.1,  # wholly above 1.5
+           "range_nees_p05": 0.2, "range_nees_p95": 3.0}  # a met line is never listed
+    assert by_chance("walk:body", rep) == ["azimuth_within_1sigma in 0.60-0.75"]
+    assert by_chance("walk:body", BODY) == []  # no interval reported: nothing to say
+    table = {"walk:body": checks("walk:body", rep)}
+    flat = list(table["walk:body"].values())
+    lines = summary_lines({"checks": table, "met": flat.count(True), "missed": flat.count(False), "no_frames": 0,
+                           "missed_by_chance": {"walk:body": by_chance("walk:body", rep)},
+                           "missed_by_chance_count": 1})
+    assert "azimuth_within_1sigma in 0.60-0.75 (chance)" in lines[0]
+    assert "elevation_nees in 0.7-1.5;" in lines[0] + ";" and "elevation_nees in 0.7-1.5 (chance)" not in lines[0]
+    assert "(1 of them 1-σ lines within chance of their band)" in lines[-1]

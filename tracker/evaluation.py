@@ -106,6 +106,34 @@ def sigma_consistency(z: list[float]) -> tuple[float, float]:
     return float(np.mean(np.abs(a) <= 1.0)), float(np.mean(a * a))
 
 
+SIGMA_INTERVAL = (5.0, 95.0)  # percentiles of sigma_consistency_interval: a 90 % interval
+SIGMA_RESAMPLES = 1000
+
+
+def sigma_consistency_interval(z: list[float], block: int, resamples: int = SIGMA_RESAMPLES, seed: int = 0
+                               ) -> tuple[tuple[float, float], tuple[float, float]]:
+    """How far `sigma_consistency`'s two figures could move by chance alone: their 5th and 95th
+    percentiles ((within lo, hi), (NEES lo, hi)) over `resamples` circular moving-block bootstrap
+    resamples of the frames' normalised errors z, in their order, in blocks of `block` frames. A frame's
+    error is much like the next one's (the same pose, gait, occlusion for a second or so), so 300 frames
+    hold far fewer independent draws; resampling whole blocks keeps that. A figure outside its acceptance
+    band whose interval reaches into the band is a miss that a run of the same length could not tell from
+    honest 1-σ. Seeded: the same z give the same interval. nan when z is empty."""
+    if not z:
+        nan = float("nan")
+        return (nan, nan), (nan, nan)
+    a = np.asarray(z, float)
+    n = a.size
+    b = max(1, min(block, n))
+    rng = np.random.default_rng(seed)
+    starts = rng.integers(0, n, size=(resamples, -(-n // b)))
+    idx = ((starts[:, :, None] + np.arange(b)) % n).reshape(resamples, -1)[:, :n]
+    draws = a[idx]
+    within = np.percentile(np.mean(np.abs(draws) <= 1.0, axis=1), SIGMA_INTERVAL)
+    nees = np.percentile(np.mean(draws * draws, axis=1), SIGMA_INTERVAL)
+    return (float(within[0]), float(within[1])), (float(nees[0]), float(nees[1]))
+
+
 WIDE_PX = 40  # the angle acceptance lines hold for targets wider than this (px)
 
 
@@ -295,6 +323,11 @@ def _report(name: str, seed: int, n: int, acc: _Acc, gain: Callable[[float], flo
                                  "azimuth_silhouette", "elevation_silhouette")):
             extra[f"{key}_rmse_wide_deg"] = _rms(list(w[:, k]))
     (r_in, r_nees), (a_in, a_nees), (e_in, e_nees) = (sigma_consistency(z) for z in (acc.z_r, acc.z_az, acc.z_el))
+    for q, z in (("range", acc.z_r), ("azimuth", acc.z_az), ("elevation", acc.z_el)):
+        if z:  # a 90 % interval of each, by a block bootstrap over one-second blocks
+            (w_lo, w_hi), (n_lo, n_hi) = sigma_consistency_interval(z, max(1, round(fps)))
+            extra.update({f"{q}_within_1sigma_p05": w_lo, f"{q}_within_1sigma_p95": w_hi,
+                          f"{q}_nees_p05": n_lo, f"{q}_nees_p95": n_hi})
     return EvalReport(
         scenario=name, seed=seed, frames=n, visible_frames=acc.visible,
         detection_rate=acc.detected / max(acc.visible, 1), false_target_frames=acc.false_target,
