@@ -38,6 +38,32 @@ def test_eval_plates_on_request() -> None:
     assert rep["scenario"] == "walk:plate" and "wide_frames" not in rep and rep["pixel_f1"] > 0.99
 
 
+def test_eval_writes_a_row_per_visible_frame_that_adds_up_to_the_report(tmp_path: Path) -> None:
+    path = tmp_path / "frames.jsonl"
+    path.write_text("kept until the run is done\n")
+    out = tmeye("eval", "--scenario", "approach", "--frames", "12", "--frames-out", str(path), "--json")
+    assert out.returncode == 0, out.stderr
+    rep = json.loads(out.stdout)
+    rows = [json.loads(x) for x in path.read_text().splitlines()]
+    assert len(rows) == rep["visible_frames"] and [r["frame"] for r in rows] == sorted(r["frame"] for r in rows)
+    seen = [r for r in rows if r["detected"]]
+    assert len(seen) == round(rep["detection_rate"] * rep["visible_frames"])
+    for r in seen:  # each normalised error is its error over its 1-sigma, as the report counts them
+        assert r["z_r"] == pytest.approx(r["error_r_m"] / r["sigma_r_m"], rel=1e-3, abs=1e-4)
+        assert r["error_r_m"] == pytest.approx(r["r_m"] - r["truth_r_m"], abs=2e-6)
+    assert np.mean([r["z_r"] ** 2 for r in seen]) == pytest.approx(rep["range_nees"], rel=1e-3)
+    assert np.mean([abs(r["z_elevation"]) <= 1 for r in seen]) == pytest.approx(rep["elevation_within_1sigma"])
+    assert not list(tmp_path.glob(".*.tmp"))  # written through a file beside it, renamed
+
+
+def test_eval_writes_the_closed_loops_frames_too(tmp_path: Path) -> None:
+    path = tmp_path / "loop.jsonl"
+    out = tmeye("eval", "--scenario", "manoeuvre", "--frames", "3", "--frames-out", str(path), "--json")
+    assert out.returncode == 0, out.stderr
+    rows = [json.loads(x) for x in path.read_text().splitlines()]
+    assert len(rows) == json.loads(out.stdout)["visible_frames"] == 3 and all(r["detected"] for r in rows)
+
+
 def test_eval_all_runs_every_scenario_both_ways_and_checks_each() -> None:
     out = tmeye("eval", "--all", "--frames", "2", "--json", timeout=600)
     assert out.returncode == 0, out.stderr
@@ -70,6 +96,9 @@ def test_track_prints_one_json_line_per_frame() -> None:
         (("eval",), "give --scenario"),
         (("eval", "--scenario", "nope:plate"), "unknown scenario 'nope:plate'"),
         (("eval", "--all", "--scenario", "walk"), "--all runs every scenario"),
+        (("eval", "--all", "--frames-out", "f.jsonl"), "--frames-out writes the frames of one tracking scenario"),
+        (("eval", "--scenario", "calibration", "--frames-out", "f.jsonl"), "--frames-out writes the frames"),
+        (("eval", "--scenario", "walk", "--frames-out", "/nonexistent/dir/f.jsonl"), "no such directory"),
         (("bench", "--size", "big"), "--size must look like 640x480"),
         (("bench", "--size", "10x10"), "out of range"),
         (("bench", "--scenario", "nope"), "unknown scenario 'nope'"),

@@ -171,8 +171,9 @@ def _aim_offset(truth: FrameTruth, sim: SimRig) -> tuple[float, float] | None:
 
 
 def run_loop(name: str, seed: int, frames: int | None, predictive: bool,
-             progress: Progress | None = None) -> RunRecord:
-    """One closed-loop run of a scenario with the predictive or the reactive controller."""
+             progress: Progress | None = None, rows: list[dict[str, object]] | None = None) -> RunRecord:
+    """One closed-loop run of a scenario with the predictive or the reactive controller; rows: as
+    tracker.evaluation.run_scenario's."""
     cv2.setNumThreads(1)
     scenario = get_scenario(name)
     sim = SimRig(scenario, seed=seed)
@@ -188,7 +189,7 @@ def run_loop(name: str, seed: int, frames: int | None, predictive: bool,
     assert isinstance(path, LegPath)
     n = min(frames or scenario.frames, scenario.frames)
     rec = RunRecord(n, scenario.fps)
-    acc = _Acc()
+    acc = _Acc(rows=rows)
     gap, lost_after = 0, round(1.0 * scenario.fps)
     for i in range(n):
         t = i / scenario.fps
@@ -259,17 +260,19 @@ def _rms(v: list[float]) -> float:
 
 
 def evaluate_closed_loop(name: str, frames: int | None = None, seed: int = 0,
-                         progress: Progress | None = None, parallel: bool = True) -> ClosedLoopReport:
-    """Both runs of a closed-loop scenario (the reactive one in a second process when `parallel`)."""
+                         progress: Progress | None = None, parallel: bool = True,
+                         rows: list[dict[str, object]] | None = None) -> ClosedLoopReport:
+    """Both runs of a closed-loop scenario (the reactive one in a second process when `parallel`); rows:
+    the predictive run's frames (tracker.evaluation.frame_row), as the report's detection figures are."""
     t0 = time.perf_counter()
     if parallel:
         ctx = multiprocessing.get_context("spawn")  # a fresh interpreter: no forked OpenCV threads
         with ProcessPoolExecutor(max_workers=1, mp_context=ctx) as pool:
             fut = pool.submit(run_loop, name, seed, frames, False)
-            main = run_loop(name, seed, frames, True, progress)
+            main = run_loop(name, seed, frames, True, progress, rows)
             reactive = fut.result()
     else:
-        main = run_loop(name, seed, frames, True, progress)
+        main = run_loop(name, seed, frames, True, progress, rows)
         reactive = run_loop(name, seed, frames, False)
     imm = _figures(prediction_errors(closed_loop_imm(), main.samples))
     psd, cv = tuned_cv(main.samples)

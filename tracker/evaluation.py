@@ -91,6 +91,8 @@ class _Acc:
     mog2_f1: list[float] = field(default_factory=list)
     step_ms: list[float] = field(default_factory=list)
     render_ms: list[float] = field(default_factory=list)
+    # one row per frame the target is visible in (`frame_row`; `tmeye eval --frames-out`), None: not kept
+    rows: list[dict[str, object]] | None = None
 
 
 def _rms(v: list[float]) -> float:
@@ -182,6 +184,8 @@ def score_frame(acc: _Acc, res: FrameResult, truth: FrameTruth, pipe: Pipeline, 
     acc.visible += 1
     det = next((d for d in res.detections if _on(d, tt, truth.ids_left)), None)  # target 1, by any track
     if det is None:
+        if acc.rows is not None:
+            acc.rows.append({"frame": res.index, "t_s": round(truth.t, 6), "detected": False})
         return
     if acc.last_id is not None and det.track_id != acc.last_id:
         acc.id_switches += 1
@@ -200,7 +204,8 @@ def score_frame(acc: _Acc, res: FrameResult, truth: FrameTruth, pipe: Pipeline, 
     acc.near.append(tt.near_depth_m)
     acc.az.append(_deg(loc.theta - th_t))
     acc.el.append(float(np.degrees(loc.phi - ph_t)))
-    if tt.surface_world is not None and _width_px(truth.ids_left, tt.target_id) > WIDE_PX:
+    wide = tt.surface_world is not None and _width_px(truth.ids_left, tt.target_id) > WIDE_PX
+    if wide:
         meas = loc.world if loc.measured_world is None else loc.measured_world  # no upright shift
         g = truth.gimbal
         c = gimbal_rotation(g.pan_deg, g.tilt_deg) @ rect.rig.left.c  # the left lens centre, world frame
@@ -209,6 +214,33 @@ def score_frame(acc: _Acc, res: FrameResult, truth: FrameTruth, pipe: Pipeline, 
     acc.z_r.append((loc.r - r_t) / max(loc.sigma_r, tiny))
     acc.z_az.append(float(np.radians(acc.az[-1])) / max(loc.sigma_theta, tiny))
     acc.z_el.append(float(np.radians(acc.el[-1])) / max(loc.sigma_phi, tiny))
+    if acc.rows is not None:
+        acc.rows.append(frame_row(res.index, truth.t, det, (r_t, th_t, ph_t, float(d_true[0])), acc, wide))
+
+
+def frame_row(index: int, t: float, det: Detection, truth: tuple[float, float, float, float], acc: _Acc,
+              wide: bool) -> dict[str, object]:
+    """A detected frame's row (`tmeye eval --frames-out`): what the tracker reported with its 1-σ, the truth
+    (r, θ, φ of the volume centre about the origin, its disparity), the errors and normalised errors
+    (error / 1-σ, as `sigma_consistency` counts them), the blob (box, area, disparity, its matcher's 1-σ,
+    the background's disparity), the centroid's distance from the true silhouette's (raw left px) and, where
+    the body is wider than WIDE_PX, the angle errors against its seen surface. Lengths m, angles deg."""
+    loc, b = det.loc, det.blob
+    r_t, th_t, ph_t, d_t = truth
+    row: dict[str, object] = {
+        "frame": index, "t_s": t, "detected": True, "track_id": det.track_id,
+        "r_m": loc.r, "theta_deg": float(np.degrees(loc.theta)), "phi_deg": float(np.degrees(loc.phi)),
+        "sigma_r_m": loc.sigma_r, "sigma_theta_deg": float(np.degrees(loc.sigma_theta)),
+        "sigma_phi_deg": float(np.degrees(loc.sigma_phi)),
+        "truth_r_m": r_t, "truth_theta_deg": float(np.degrees(th_t)), "truth_phi_deg": float(np.degrees(ph_t)),
+        "error_r_m": acc.rng[-1], "error_azimuth_deg": acc.az[-1], "error_elevation_deg": acc.el[-1],
+        "z_r": acc.z_r[-1], "z_azimuth": acc.z_az[-1], "z_elevation": acc.z_el[-1],
+        "disparity_px": b.disparity, "disparity_sigma_px": b.disparity_sigma, "truth_disparity_px": d_t,
+        "background_disparity_px": b.bg_disparity, "area_px": b.area, "box_px": [int(v) for v in b.box],
+        "centroid_error_px": acc.cen[-1], "one_camera": b.one_camera}
+    if wide:
+        row["azimuth_surface_error_deg"], row["elevation_surface_error_deg"] = acc.wide[-1][2:4]
+    return {k: (round(v, 6) if isinstance(v, float) else v) for k, v in row.items()}
 
 
 def _wide_errors(az: float, el: float, ray: tuple[F64, F64], tt: TargetTruth, origin: F64) -> tuple[float, ...]:
@@ -248,10 +280,12 @@ def target_prior(scenario: Scenario) -> SolidPrior | None:
 
 
 def run_scenario(name: str | Scenario, frames: int | None = None, seed: int = 0, rig: StereoRig | None = None,
-                 detector: DetectorConfig | None = None, progress: Progress | None = None) -> EvalReport:
+                 detector: DetectorConfig | None = None, progress: Progress | None = None,
+                 rows: list[dict[str, object]] | None = None) -> EvalReport:
     """Run the pipeline on a scenario (a name, or a Scenario not in the list) and score it. `rig`: the
     calibration the pipeline uses (default: the simulator's true rig); the simulator always renders
-    through its true rig."""
+    through its true rig. rows: a list to append a row to for each frame the target is visible in
+    (`frame_row`)."""
     scenario = get_scenario(name) if isinstance(name, str) else name
     name = scenario.name
     if scenario.closed_loop:
@@ -261,7 +295,7 @@ def run_scenario(name: str | Scenario, frames: int | None = None, seed: int = 0,
     for g in survey_poses(scenario):
         pipe.learn_background(sim.background(g))
     n = min(frames or scenario.frames, scenario.frames)
-    acc = _Acc()
+    acc = _Acc(rows=rows)
     min_area = pipe.subtractor.cfg.min_area_px
     # OpenCV's MOG2 on the same left images, for comparison where the light changes
     mog = cv2.createBackgroundSubtractorMOG2(detectShadows=False) if _steps(scenario.gain, n, scenario.fps) else None

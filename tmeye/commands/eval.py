@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import argparse
+import json
+import os
+from pathlib import Path
 from typing import Any
 
 from tmeye.errors import UserError
@@ -38,6 +41,9 @@ def register(subparsers: Any) -> None:
     p.add_argument("--startup", action="store_true",
                    help="instead: frames lost when a target stands in view from frame 0 and then walks, with the "
                         "first pair as the background, with the background learnt from the stream, and surveyed")
+    p.add_argument("--frames-out", metavar="FILE",
+                   help="with --scenario: also write one JSON line per frame the target is visible in to FILE "
+                        "(what was reported and its 1-sigma, the truth, the errors and normalised errors, the blob)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
 
@@ -70,10 +76,12 @@ def scenario_name(name: str) -> str:
 def run(args: argparse.Namespace) -> int:
     names = _scenarios()
     if args.matching:
+        if args.frames_out:
+            raise UserError("--frames-out writes the frames of one tracking scenario: give it with --scenario NAME")
         emit(_matching(args.matching), args.json)
         return 0
     if args.near_wall or args.startup:
-        if args.scenario or args.rig or args.epsilon is not None or args.alarms or args.all or (
+        if args.scenario or args.rig or args.epsilon is not None or args.alarms or args.all or args.frames_out or (
                 args.near_wall and args.startup):
             raise UserError("--near-wall and --startup run their own scenes: give only --seed, --frames and --json")
         if args.frames is not None and args.frames < 1:
@@ -85,7 +93,8 @@ def run(args: argparse.Namespace) -> int:
             print(f"{name:14s} {desc}")
         return 0
     if args.alarms:
-        if args.scenario or args.frames is not None or args.rig or args.epsilon is not None or args.all:
+        if args.scenario or args.frames is not None or args.rig or args.epsilon is not None or args.all or \
+                args.frames_out:
             raise UserError("--alarms runs the endless scene: give only --minutes, --seed and --json with it")
         if not 0 < args.minutes <= 600:
             raise UserError(f"--minutes must be above 0 and at most 600, got {args.minutes:g}")
@@ -97,6 +106,8 @@ def run(args: argparse.Namespace) -> int:
         return 0
     if args.frames is not None and args.frames < 1:
         raise UserError(f"--frames must be at least 1, got {args.frames}")
+    if args.frames_out and (args.all or not args.scenario or scenario_name(args.scenario) == "calibration"):
+        raise UserError("--frames-out writes the frames of one tracking scenario: give it with --scenario NAME")
     if args.all:
         if args.scenario or args.rig or args.epsilon is not None:
             raise UserError("--all runs every scenario: give only --frames, --seed and --json with it")
@@ -109,24 +120,54 @@ def run(args: argparse.Namespace) -> int:
 
         result: dict[str, object] = run_calibration_scenario(seed=args.seed).to_json()
     else:
-        result = _tracking(args)
+        rows: list[dict[str, object]] | None = None if args.frames_out is None else []
+        out = None if args.frames_out is None else FramesOut(args.frames_out)
+        result = _tracking(args, rows)
+        if out is not None and rows is not None:
+            out.write(rows)
     emit(result, args.json)
     return 0
 
 
-def _tracking(args: argparse.Namespace) -> dict[str, object]:
+class FramesOut:
+    """`--frames-out FILE`: checked before the run (its directory exists and can be written, FILE is not a
+    directory), written after it whole, through a file beside it renamed over FILE: an interrupted run
+    leaves FILE as it was."""
+
+    def __init__(self, path: str):
+        p = Path(path)
+        if p.is_dir():
+            raise UserError(f"--frames-out {path!r} is a directory")
+        if not p.parent.is_dir():
+            raise UserError(f"--frames-out {path!r}: no such directory {str(p.parent)!r}")
+        if not os.access(p.parent, os.W_OK) or (p.exists() and not os.access(p, os.W_OK)):
+            raise UserError(f"--frames-out {path!r} cannot be written")
+        self.path = p
+
+    def write(self, rows: list[dict[str, object]]) -> None:
+        tmp = self.path.with_name(f".{self.path.name}.{os.getpid()}.tmp")
+        try:
+            with tmp.open("w", encoding="utf-8") as f:
+                f.writelines(json.dumps(r) + "\n" for r in rows)
+            os.replace(tmp, self.path)
+        except OSError as e:
+            tmp.unlink(missing_ok=True)
+            raise UserError(f"--frames-out {str(self.path)!r}: {e.strerror or e}") from None
+
+
+def _tracking(args: argparse.Namespace, rows: list[dict[str, object]] | None = None) -> dict[str, object]:
     from tracker.detect import DetectorConfig
     from tracker.evaluation import run_scenario
     from tracker.geometry import load_rig
     from tracker.sim.scenarios import get_scenario
 
     if get_scenario(args.scenario).closed_loop:
-        return _closed_loop(args)
+        return _closed_loop(args, rows)
 
     rig = load_rig(args.rig) if args.rig else None
     det = DetectorConfig(epsilon=args.epsilon) if args.epsilon is not None else None
     report = run_scenario(args.scenario, frames=args.frames, seed=args.seed, rig=rig, detector=det,
-                          progress=Progress(f"eval {args.scenario}"))
+                          progress=Progress(f"eval {args.scenario}"), rows=rows)
     return report.to_json()
 
 
@@ -142,14 +183,14 @@ def _all(args: argparse.Namespace) -> int:
     return 0
 
 
-def _closed_loop(args: argparse.Namespace) -> dict[str, object]:
+def _closed_loop(args: argparse.Namespace, rows: list[dict[str, object]] | None = None) -> dict[str, object]:
     """A closed-loop scenario: the predictive loop and the reactive baseline drive the simulated gimbal."""
     from tracker.closedloop_eval import evaluate_closed_loop
 
     if args.rig or args.epsilon is not None:
         raise UserError(f"--rig and --epsilon are not supported by the closed-loop scenario {args.scenario!r}")
     report = evaluate_closed_loop(args.scenario, frames=args.frames, seed=args.seed,
-                                  progress=Progress(f"eval {args.scenario}"))
+                                  progress=Progress(f"eval {args.scenario}"), rows=rows)
     return report.to_json()
 
 
