@@ -434,3 +434,33 @@ def test_a_person_seen_side_on_has_its_centre_deeper_behind_its_face() -> None:
     moved = float(np.linalg.norm(person.rig - c) - np.linalg.norm(flat.rig - c))
     assert math.isclose(moved, side * float(flat.rig[2]) / rect.f, rel_tol=1e-6)
     assert person.sigma_r > flat.sigma_r + 0.5 * prior.upright_side_sigma * side * float(flat.rig[2]) / rect.f
+
+
+def _side_cut(x0: int) -> tuple[tuple[float, float], tuple[bool, bool]]:
+    """Pipeline._partly_seen of a person's outline 16 x 60 px at disparity 22 px starting at column x0, before
+    a far background (2 px) that hides nothing: (x, y) extra 1-σ and whether width and height were seen whole."""
+    from tracker.bgdepth import CorrespondenceMap
+    from tracker.results import Blob
+    from tracker.visibility import padded
+
+    pipe = pipeline.Pipeline(default_rig(), solid=SolidPrior())
+    d, size = 22.0, pipe.rig.left.size
+    box = (x0, 200, min(x0 + 16, size[0]), 260)
+    mask = np.ones((box[3] - box[1], box[2] - box[0]), bool)
+    b = Blob(box, mask, int(mask.sum()), np.zeros(2), np.zeros(2), d, 0.05, 2.0, 1.0)
+    grown, gbox = padded(mask, box, size, left=2 + 22, below=2 + 60)
+    shape = grown.shape
+    cm = CorrespondenceMap(np.zeros(shape, np.float32), np.zeros(shape, np.float32), np.ones(shape, bool),
+                           np.full(shape, 2.0, np.float32), np.zeros(shape, np.uint8))
+    _, cut, whole = pipe._partly_seen(b, [], True, (grown, gbox, cm))
+    return cut, whole
+
+
+def test_a_person_cut_at_a_side_of_the_image_holds_the_rest_of_its_stature_in_y() -> None:
+    prior = SolidPrior()
+    short = prior.short_of_stature_px(60.0, 22.0, default_rig().baseline)  # 1.7 m at 22 px: 125 px, 60 seen
+    cut, whole = _side_cut(640 - 16)  # at the right border: the rest of the person is above or below what is seen
+    assert not whole[0]
+    assert cut[1] >= short / math.sqrt(12.0) - 1e-6 > 15.0
+    inside, seen = _side_cut(300)  # the same outline clear of every border: nothing may be hidden
+    assert inside == (0.0, 0.0) and seen == (True, True)
