@@ -120,19 +120,18 @@ def run(args: argparse.Namespace) -> int:
 
         result: dict[str, object] = run_calibration_scenario(seed=args.seed).to_json()
     else:
-        rows: list[dict[str, object]] | None = None if args.frames_out is None else []
-        out = None if args.frames_out is None else FramesOut(args.frames_out)
-        result = _tracking(args, rows)
-        if out is not None and rows is not None:
-            out.write(rows)
+        out = None if args.frames_out is None else FramesOut(args.frames_out)  # checked before the run
+        result = _tracking(args, None if out is None else out.rows)
+        if out is not None:
+            out.write()
     emit(result, args.json)
     return 0
 
 
 class FramesOut:
     """`--frames-out FILE`: checked before the run (its directory exists and can be written, FILE is not a
-    directory), written after it whole, through a file beside it renamed over FILE: an interrupted run
-    leaves FILE as it was."""
+    directory), its rows gathered by the run (tracker.evaluation.frame_row), written after it whole, through
+    a file beside it renamed over FILE: an interrupted run leaves FILE as it was."""
 
     def __init__(self, path: str):
         p = Path(path)
@@ -143,12 +142,13 @@ class FramesOut:
         if not os.access(p.parent, os.W_OK) or (p.exists() and not os.access(p, os.W_OK)):
             raise UserError(f"--frames-out {path!r} cannot be written")
         self.path = p
+        self.rows: list[dict[str, object]] = []
 
-    def write(self, rows: list[dict[str, object]]) -> None:
+    def write(self) -> None:
         tmp = self.path.with_name(f".{self.path.name}.{os.getpid()}.tmp")
         try:
             with tmp.open("w", encoding="utf-8") as f:
-                f.writelines(json.dumps(r) + "\n" for r in rows)
+                f.writelines(json.dumps(r) + "\n" for r in self.rows)
             os.replace(tmp, self.path)
         except OSError as e:
             tmp.unlink(missing_ok=True)
