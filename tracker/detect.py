@@ -7,13 +7,14 @@ Per frame:
    so places where the background warp is imperfect (half-occlusions, aliasing) are learnt away, objects
    that stop merge into the background (within `absorb_s` for residuals up to 100 grey levels: under an
    object the floor rises one level every absorb_s·fps/100 frames), and a background that reappears is
-   usable in the next frame. A global change of light scales Γ and Θ alike and leaves m unchanged.
+   usable in the next frame. A global change of light scales Γ and Θ alike and leaves m unchanged; the
+   two cameras' own exposures, which need not stay alike, are matched first (`balanced`, tracker.exposure).
 2. Verification at full resolution inside each candidate's box (tracker.verify).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import cv2
 import numpy as np
@@ -21,6 +22,7 @@ from numpy.typing import NDArray
 
 from tracker.bgdepth import BackgroundDepth, CorrespondenceMap
 from tracker.boxes import stacked_joined
+from tracker.exposure import ExposureBalance
 from tracker.frames import GimbalState, StereoFrame, check_pair
 from tracker.masks import change, strict_limit
 
@@ -184,6 +186,7 @@ class StereoSubtractor:
         self.floor = np.zeros(self.low_shape, np.uint8)  # B, the temporal residual floor
         self._ones = np.ones(self.low_shape, np.uint8)
         self._maps: _PoseMaps | None = None
+        self.exposure = ExposureBalance()
         self._fg_every = max(1, round(self.cfg.absorb_s * self.cfg.fps / 100.0))
         self._count = 0
         self.moving = False
@@ -303,11 +306,24 @@ class StereoSubtractor:
         return np.asarray(up[oy:oy + y1 - y0, ox:ox + x1 - x0])
 
     # -- the step ---------------------------------------------------------------------------------
-    def step(self, frame: StereoFrame) -> Candidates:
+    def _checked(self, frame: StereoFrame) -> None:
         check_pair(frame.left, frame.right)
         if frame.left.shape[::-1] != self.bg.rect.rig.left.size:
             raise ValueError(f"frame size {frame.left.shape[::-1]} does not match the rig's "
                              f"{self.bg.rect.rig.left.size}")
+
+    def balanced(self, frame: StereoFrame) -> StereoFrame:
+        """The frame with its right image's exposure matched to the left's (tracker.exposure), measured on
+        the candidate grid at this pose's background correspondence; the frame itself where they match."""
+        self._checked(frame)
+        pm, s = self.maps(frame.gimbal), self.cfg.stride
+        key = frame.left[::s, ::s] if s > 1 else frame.left
+        ref = cv2.remap(frame.right, pm.low_fixed, None, cv2.INTER_NEAREST)  # type: ignore[call-overload]
+        ratio = self.exposure.step(key, np.asarray(ref, np.uint8), pm.valid_u8)
+        return replace(frame, right=self.exposure.balanced(frame.right, ratio)) if ratio.applied else frame
+
+    def step(self, frame: StereoFrame) -> Candidates:
+        self._checked(frame)
         prev, pm = self._frame_pose, self.maps(frame.gimbal)
         moving = prev is not None and prev != pm.pose
         if prev != pm.pose:  # new pose: start from the survey's floor there (the old one is misplaced)

@@ -140,6 +140,7 @@ class Pipeline:
         ms: dict[str, float] = {}
         self._done = None  # a frame that raises leaves nothing for between_frames
         t0 = time.perf_counter()
+        frame = self.subtractor.balanced(frame)  # the right camera's exposure matched to the left's
         cands = self.subtractor.step(frame)
         t1 = time.perf_counter()
         hints = self.ego.from_home(self.tracker.predictions(frame.t), frame.gimbal)  # at this frame's pose

@@ -41,6 +41,9 @@ def register(subparsers: Any) -> None:
     p.add_argument("--startup", action="store_true",
                    help="instead: frames lost when a target stands in view from frame 0 and then walks, with the "
                         "first pair as the background, with the background learnt from the stream, and surveyed")
+    p.add_argument("--exposure", action="store_true",
+                   help="instead: pan:body and walk:body with the right camera's exposure stepped to 0.8 and 1.2 "
+                        "times the left's at 2 s, with the exposures matched and without, beside the cameras alike")
     p.add_argument("--frames-out", metavar="FILE",
                    help="with --scenario: also write one JSON line per frame the target is visible in to FILE "
                         "(what was reported and its 1-sigma, the truth, the errors and normalised errors, the blob)")
@@ -80,13 +83,14 @@ def run(args: argparse.Namespace) -> int:
             raise UserError("--frames-out writes the frames of one tracking scenario: give it with --scenario NAME")
         emit(_matching(args.matching), args.json)
         return 0
-    if args.near_wall or args.startup:
+    if args.near_wall or args.startup or args.exposure:
         if args.scenario or args.rig or args.epsilon is not None or args.alarms or args.all or args.frames_out or (
-                args.near_wall and args.startup):
-            raise UserError("--near-wall and --startup run their own scenes: give only --seed, --frames and --json")
+                args.near_wall + args.startup + args.exposure > 1):
+            raise UserError("--near-wall, --startup and --exposure run their own scenes: give one, and only --seed, "
+                            "--frames and --json with it")
         if args.frames is not None and args.frames < 1:
             raise UserError(f"--frames must be at least 1, got {args.frames}")
-        emit(_near_wall(args) if args.near_wall else _startup(args), args.json)
+        emit(_near_wall(args) if args.near_wall else _startup(args) if args.startup else _exposure(args), args.json)
         return 0
     if args.list:
         for name, desc in names.items():
@@ -198,6 +202,12 @@ def _near_wall(args: argparse.Namespace) -> dict[str, object]:
     from tracker.nearwall_eval import near_wall_table
 
     return near_wall_table(seed=args.seed, frames=args.frames)
+
+
+def _exposure(args: argparse.Namespace) -> dict[str, object]:
+    from tracker.exposure_eval import exposure_table
+
+    return exposure_table(seed=args.seed, frames=args.frames)
 
 
 def _startup(args: argparse.Namespace) -> dict[str, object]:

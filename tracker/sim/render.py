@@ -222,8 +222,9 @@ class SimRenderer:
                     for view, inv in zip(self.views, self._static(gimbal)[1], strict=True)]
 
     def render(self, index: int, t: float, gimbal: GimbalState, moving: Sequence[Surface | Solid], gain: float,
-               noisy: bool = True) -> tuple[StereoFrame, list[U8]]:
-        """Render one pair at time t (s). Returns the frame and the (left, right) id images."""
+               noisy: bool = True, right_gain: float = 1.0) -> tuple[StereoFrame, list[U8]]:
+        """Render one pair at time t (s). Returns the frame and the (left, right) id images. gain: the
+        scene's light on both cameras; right_gain: the right camera's exposure over the left's."""
         key = (round(gimbal.pan_deg, 6), round(gimbal.tilt_deg, 6))
         cached = self._cache.get(key)
         R_wr = gimbal_rotation(gimbal.pan_deg, gimbal.tilt_deg)
@@ -239,8 +240,9 @@ class SimRenderer:
             ids = np.zeros(img8.shape, np.uint8)
             if moving:
                 self._cast_moving(k, R_wr, moving, t, img8, base_inv, ids)
-            if gain != 1.0:
-                img8 = np.asarray(cv2.convertScaleAbs(img8, alpha=gain), np.uint8)
+            g = gain * right_gain if k == 1 else gain
+            if g != 1.0:
+                img8 = np.asarray(cv2.convertScaleAbs(img8, alpha=g), np.uint8)
             if noisy:
                 pos, neg = self._noise[k]
                 o, h = offsets[k], img8.shape[0]

@@ -109,6 +109,8 @@ class Scenario:
     paths: tuple[tuple[int, Callable[[float], F64]], ...] = ((1, _walk),)
     foliage: bool = False
     gain: Callable[[float], float] = _unity
+    # the right camera's exposure over the left's (its own auto-exposure, a different sensor): 1 alike
+    right_gain: Callable[[float], float] = _unity
     gimbal: Callable[[float], GimbalState] = _still
     closed_loop: bool = False
     tags: tuple[str, ...] = field(default_factory=tuple)
@@ -308,7 +310,7 @@ class SimRig:
         a survey would capture."""
         g = gimbal or self.scenario.gimbal(0.0)
         scenery = [self._foliage] if self._foliage is not None else []  # the bush is background too
-        frame, _ = self.renderer.render(-1, -1.0, g, scenery, 1.0)
+        frame, _ = self.renderer.render(-1, -1.0, g, scenery, 1.0, right_gain=self.scenario.right_gain(0.0))
         return frame
 
     def step(self, gimbal: GimbalState | None = None) -> SimFrame:
@@ -322,7 +324,7 @@ class SimRig:
         if self._foliage is not None:
             moving.append(self._foliage)
         gain = self.script.gain(ts) if self.script is not None else self.scenario.gain(ts)
-        frame, ids = self.renderer.render(i, t, g, moving, gain)
+        frame, ids = self.renderer.render(i, t, g, moving, gain, right_gain=self.scenario.right_gain(ts))
         windows = tuple(self.renderer.windows)
         depth = self.renderer.depth_window(0) if any(isinstance(o, BodyObject) for o in objects) else None
 
