@@ -17,7 +17,7 @@ from tracker.localize import spherical
 from tracker.pipeline import Pipeline
 from tracker.results import Detection, FrameResult
 from tracker.sim.render import FrameTruth, TargetTruth
-from tracker.sim.scenarios import Scenario, SimRig, get_scenario
+from tracker.sim.scenarios import Scenario, SimFrame, SimRig, get_scenario
 from tracker.solid_prior import SolidPrior
 
 F64 = NDArray[np.float64]
@@ -304,13 +304,7 @@ def run_scenario(name: str | Scenario, frames: int | None = None, seed: int = 0,
         for _ in range(30):
             mog.apply(empty)
     for i in range(n):
-        t0 = time.perf_counter()
-        sf = sim.step()
-        t1 = time.perf_counter()
-        res = pipe.step(sf.frame)
-        t2 = time.perf_counter()
-        acc.render_ms.append((t1 - t0) * 1e3)
-        acc.step_ms.append((t2 - t1) * 1e3)
+        sf, res = timed_step(acc, sim, pipe)
         score_frame(acc, res, sf.truth, pipe, min_area)
         if mog is not None:
             truth = sf.truth.ids_left > 0
@@ -325,6 +319,18 @@ def run_scenario(name: str | Scenario, frames: int | None = None, seed: int = 0,
 def _steps(gain: Callable[[float], float], n: int, fps: float) -> list[int]:
     """Frames at which the illumination gain jumps by more than 5 %."""
     return [i for i in range(1, n) if abs(gain(i / fps) - gain((i - 1) / fps)) > 0.05]
+
+
+def timed_step(acc: _Acc, sim: SimRig, pipe: Pipeline) -> tuple[SimFrame, FrameResult]:
+    """Render the next frame and step the pipeline on it, adding the render's and the step's times (ms)
+    to acc's render_ms and step_ms."""
+    t0 = time.perf_counter()
+    sf = sim.step()
+    t1 = time.perf_counter()
+    res = pipe.step(sf.frame)
+    acc.render_ms.append((t1 - t0) * 1e3)
+    acc.step_ms.append((time.perf_counter() - t1) * 1e3)
+    return sf, res
 
 
 def survey_poses(scenario: Scenario) -> list[GimbalState]:

@@ -12,12 +12,11 @@ scaled in.
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass, replace
 
 import numpy as np
 
-from tracker.evaluation import _Acc, _report, score_frame, survey_poses, target_prior
+from tracker.evaluation import _Acc, _report, score_frame, survey_poses, target_prior, timed_step
 from tracker.exposure import ExposureBalance, ExposureConfig
 from tracker.pipeline import Pipeline
 from tracker.sim.scenarios import SimRig, get_scenario
@@ -53,12 +52,7 @@ def run_exposure(scene: str, ratio: float, matched: bool = True, at_s: float = 2
     n = min(frames or scenario.frames, scenario.frames)
     acc, ks, applied = _Acc(), [], 0
     for _ in range(n):
-        t0 = time.perf_counter()
-        sf = sim.step()
-        t1 = time.perf_counter()
-        res = pipe.step(sf.frame)
-        acc.render_ms.append((t1 - t0) * 1e3)
-        acc.step_ms.append((time.perf_counter() - t1) * 1e3)
+        sf, res = timed_step(acc, sim, pipe)
         score_frame(acc, res, sf.truth, pipe, pipe.subtractor.cfg.min_area_px)
         last = pipe.subtractor.exposure.last
         applied += int(last.applied)

@@ -10,12 +10,10 @@ foreground covers at least half of the target's pixels (MOG2 gives no range).
 
 from __future__ import annotations
 
-import time
-
 import cv2
 import numpy as np
 
-from tracker.evaluation import _Acc, _f1, _report, score_frame, survey_poses
+from tracker.evaluation import _Acc, _f1, _report, score_frame, survey_poses, timed_step
 from tracker.pipeline import Pipeline
 from tracker.sim.scenarios import SimRig, near_wall_scenario
 
@@ -40,12 +38,7 @@ def run_near_wall(gap_m: float, light: bool = False, seed: int = 0, frames: int 
     mog_hits = mog_visible = 0
     tp = fp = fn = 0
     for _ in range(n):
-        t0 = time.perf_counter()
-        sf = sim.step()
-        t1 = time.perf_counter()
-        res = pipe.step(sf.frame)
-        acc.render_ms.append((t1 - t0) * 1e3)
-        acc.step_ms.append((time.perf_counter() - t1) * 1e3)
+        sf, res = timed_step(acc, sim, pipe)
         seen = acc.visible
         score_frame(acc, res, sf.truth, pipe, pipe.subtractor.cfg.min_area_px)
         truth = sf.truth.ids_left == 1
