@@ -3,6 +3,7 @@ simulator's per-camera exposure, and `tmeye eval --exposure`'s arguments."""
 
 from __future__ import annotations
 
+import math
 import subprocess
 import sys
 from dataclasses import replace
@@ -12,6 +13,7 @@ import pytest
 
 from tracker.exposure import ExposureBalance, ExposureConfig
 from tracker.exposure_eval import ExposureStep, run_exposure
+from tracker.pipeline import Pipeline
 from tracker.sim.scenarios import SimRig, get_scenario
 
 U8 = np.uint8
@@ -44,14 +46,46 @@ def test_cameras_alike_are_left_as_they_are() -> None:
     assert ExposureBalance.balanced(right, r) is right
 
 
-def test_too_few_usable_samples_measure_nothing() -> None:
+def test_too_few_usable_samples_keep_the_last_ratio() -> None:
     key, ref, valid = _scene(1.3)
     valid[:, :] = 0
     valid[:10, :10] = 255  # 100 valid samples
     r = ExposureBalance().step(key, ref, valid)
-    assert (r.k, r.applied, r.samples) == (1.0, False, 100)
+    assert (r.k, r.applied, r.samples) == (1.0, False, 100)  # none measured before
     sat = np.full((120, 160), 250, U8)  # saturated in both: unusable
     assert not ExposureBalance().step(np.full_like(sat, 255), sat, np.full_like(sat, 255)).applied
+    bal = ExposureBalance()
+    first = bal.step(*_scene(1.25))
+    covered = bal.step(key, ref, valid)  # a view mostly covered: the ratio measured before stands
+    assert covered.applied and covered.k == first.k and covered.samples == 100
+
+
+def test_a_first_guess_from_whole_images() -> None:
+    key, ref, _ = _scene(0.8)
+    g = ExposureBalance().guessed(key, ref)
+    assert g.applied and g.k == pytest.approx(0.8, abs=0.01)
+    assert not ExposureBalance().guessed(ref, ref).applied
+    dark = np.full((120, 160), 5, U8)
+    assert ExposureBalance().guessed(dark, ref).k == 1.0  # a dark view tells nothing
+
+
+@pytest.mark.parametrize("ratio", [0.8, 1.3])
+def test_a_survey_pair_of_unlike_cameras_is_learnt_matched(ratio: float) -> None:
+    """The survey pair's exposures differ: the background is learnt from the pair matched, so eq. (9)'s
+    floor is as low as with cameras alike; learnt as it comes, the floor holds the difference."""
+    def floor(r: float, matched: bool = True) -> float:
+        sim = SimRig(replace(get_scenario("walk:plate"), right_gain=ExposureStep(r, 0.0)), seed=0)
+        pipe = Pipeline(sim.rig)
+        if not matched:
+            pipe.subtractor.exposure = ExposureBalance(ExposureConfig(dead_band=math.inf))
+        pipe.learn_background(sim.background())
+        if matched:
+            assert pipe.subtractor.exposure.last.k == pytest.approx(1 / r, abs=0.01)
+        return float(pipe.subtractor.maps(None).low.floor.mean())
+
+    alike = floor(1.0)
+    assert floor(ratio) < alike + 0.5
+    assert floor(ratio, matched=False) > alike + 5.0
 
 
 def test_bad_settings_are_refused() -> None:

@@ -28,6 +28,7 @@ from tracker.masks import change, strict_limit
 
 U8 = NDArray[np.uint8]
 Box = tuple[int, int, int, int]
+_NEAR_OBJECTS = np.ones((5, 5), np.uint8)  # two grid cells (8 px at stride 4) about an object
 
 
 def paint_masks(masks: list[tuple[Box, NDArray[np.bool_]]], row0: int, shape: tuple[int, int]
@@ -187,6 +188,7 @@ class StereoSubtractor:
         self._ones = np.ones(self.low_shape, np.uint8)
         self._maps: _PoseMaps | None = None
         self.exposure = ExposureBalance()
+        self._objects_low: U8 | None = None  # the last frame's objects on the candidate grid, for `balanced`
         self._fg_every = max(1, round(self.cfg.absorb_s * self.cfg.fps / 100.0))
         self._count = 0
         self.moving = False
@@ -321,7 +323,11 @@ class StereoSubtractor:
         key = frame.left[::s, ::s]
         at = np.ascontiguousarray(pm.low_fixed[::2, ::2])
         ref = cv2.remap(frame.right, at, None, cv2.INTER_NEAREST)  # type: ignore[call-overload]
-        ratio = self.exposure.step(key, np.asarray(ref, np.uint8), pm.valid_u8[::2, ::2])
+        valid = pm.valid_u8
+        if self._objects_low is not None:  # not on the last frame's objects, nor 8 px about them
+            valid = np.asarray(cv2.bitwise_and(valid, cv2.bitwise_not(cv2.dilate(self._objects_low, _NEAR_OBJECTS))),
+                               np.uint8)
+        ratio = self.exposure.step(key, np.asarray(ref, np.uint8), valid[::2, ::2])
         return replace(frame, right=self.exposure.balanced(frame.right, ratio)) if ratio.applied else frame
 
     def step(self, frame: StereoFrame) -> Candidates:
@@ -379,6 +385,7 @@ class StereoSubtractor:
     def update_floor(self, foreground_low: U8 | None) -> None:
         """Let the floor rise by one grey level where the residual is above it: every frame for
         background pixels, every `_fg_every` frames under verified objects. Frozen while moving."""
+        self._objects_low = None if foreground_low is None else foreground_low * np.uint8(255)
         if self._pending is None:
             return
         resid, moving = self._pending

@@ -7,16 +7,21 @@ sensor, so the ratio of their greys steps or drifts whenever one of them re-expo
 pixel then differs by that share of its grey (20 % of a mid-grey scene is 20 to 40 grey levels, past eq.
 (9)'s ε everywhere). With the cameras still, the temporal model of the left image draws the outlines and
 does not see it; while they move, eq. (9) stands alone. Measured on pan:body (2026-12-02) with the right
-camera's exposure stepped by +20 % or -20 % at 2 s: detection 1.00 -> 0.25 and 28 or 37 false-target
-frames, without this stage.
+camera's exposure stepped to 0.8 or 1.2 times the left's at 2 s: detection 1.00 -> 0.25 and 38 or 6
+false-target frames, without this stage.
 
 An exposure scales the light each pixel gathers, and the camera's tone curve (a power law, its gamma)
 keeps a ratio a ratio, so one factor k relates the two images' greys over a background seen alike:
 Γ(x, y) ≈ k Θ(x', y'). Per frame, k is the median of Γ / Θ over the candidate grid's samples at the learnt
-background's correspondence (those eq. (9) compares; most of them are background, and a median ignores
-the rest), leaving out dark and saturated samples (under `lo` or over `hi` grey levels), and the
-reference image is scaled by k before any stage reads it. Within `dead_band` of 1 it is left as it is:
-the scale would round each grey by a level or two, which ε absorbs, and images alike stay untouched.
+background's correspondence (those eq. (9) compares), leaving out dark and saturated samples (under `lo`
+or over `hi` grey levels) and those on or about the objects found in the last frame (tracker.detect), and
+the reference image is scaled by k before the frame's stages read it; the survey's pairs are learnt again
+so matched where they differ (tracker.pipeline.learn_background), or eq. (9)'s floors would hold the
+difference. Within `dead_band` of 1 the image is left as it is: the scale would round each grey by a level
+or two, which ε absorbs, and images alike stay untouched. A median holds while most samples are
+background seen alike: an object new in the frame that covers a third of the view, shaded from one side
+to the other, moved it by about 3 % in a test with sensor noise (2026-12-02, before the last frame's
+objects were left out).
 """
 
 from __future__ import annotations
@@ -32,8 +37,9 @@ U8 = NDArray[np.uint8]
 
 @dataclass(frozen=True)
 class ExposureConfig:
-    """dead_band: |k - 1| at or under which the reference image is left as it is; min_samples: fewer usable
-    samples than this measure nothing (k = 1); lo, hi: the usable samples' greys in both images."""
+    """dead_band: |k - 1| at or under which the reference image is left as it is; min_samples: with fewer
+    usable samples than this the last ratio measured stands (1 before any); lo, hi: the usable samples'
+    greys in both images."""
 
     dead_band: float = 0.03
     min_samples: int = 500
@@ -70,12 +76,22 @@ class ExposureBalance:
         c = self.cfg
         use = (valid > 0) & (key >= c.lo) & (key <= c.hi) & (ref >= c.lo) & (ref <= c.hi)
         n = int(np.count_nonzero(use))
-        if n < c.min_samples:
-            self.last = ExposureRatio(1.0, n, False)
+        if n < c.min_samples:  # too few to tell (a view mostly covered): the last measured ratio stands
+            self.last = ExposureRatio(self.last.k, n, self.last.applied)
             return self.last
         k = float(np.median(key[use].astype(np.float32) / ref[use].astype(np.float32)))
         self.last = ExposureRatio(k, n, abs(k - 1.0) > c.dead_band)
         return self.last
+
+    def guessed(self, left: U8, right: U8) -> ExposureRatio:
+        """k from two whole images (H, W) alone, before any correspondence is known (a survey's first
+        pair): the ratio of their mean greys, the two cameras seeing much the same scene (within 0.3 % of
+        1 on the simulator's alike cameras at every survey pose of walk, pan, occlusion, foliage and
+        approach). Does not count as the last measurement."""
+        a, b = float(np.mean(left)), float(np.mean(right))
+        if min(a, b) < self.cfg.lo:  # a dark view tells nothing
+            return ExposureRatio(1.0, left.size, False)
+        return ExposureRatio(a / b, left.size, abs(a / b - 1.0) > self.cfg.dead_band)
 
     @staticmethod
     def balanced(right: U8, ratio: ExposureRatio) -> U8:

@@ -9,6 +9,7 @@ threads and published to many subscribers.
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 from functools import cache, partial
 
 import cv2
@@ -104,18 +105,31 @@ class Pipeline:
         self.learner: StreamLearner | None = None
 
     def learn_background(self, frame: StereoFrame) -> int:
-        """Learn the background's geometry from an empty-scene pair (any gimbal pose)."""
-        n = self.bg.learn(frame)
+        """Learn the background's geometry from an empty-scene pair (any gimbal pose): again from the pair
+        with the cameras' exposures matched where they differ (tracker.exposure; eq. (9)'s floors would
+        hold the difference)."""
+        return self._learn(frame)[0]
+
+    def _learn(self, frame: StereoFrame) -> tuple[int, StereoFrame]:
+        """Learn from the pair matched by its images' mean greys, then by its background's correspondence
+        (tracker.exposure); again where the two disagree. Returns the points learnt and the matched pair."""
+        ex = self.subtractor.exposure
+        guess = ex.guessed(frame.left, frame.right)
+        n = self.bg.learn(replace(frame, right=ex.balanced(frame.right, guess)) if guess.applied else frame)
         self.subtractor.reset_maps()
-        self.subtractor.prime(frame)
-        return n
+        matched = self.subtractor.balanced(frame)
+        if abs(ex.last.k / guess.k - 1.0) > ex.cfg.dead_band:
+            n = self.bg.learn(matched)
+            self.subtractor.reset_maps()
+        self.subtractor.prime(matched)
+        return n, matched
 
     def learn_background_from_stream(self, first: StereoFrame, config: StreamLearnConfig | None = None) -> int:
         """Start from the first pair as the background, then learn it again from the stream's robust
         statistics while the cameras stay at its pose (tracker.bglearn): objects in view at start-up
         need not leave first. Returns the number of background points learnt from `first`."""
-        n = self.learn_background(first)
-        self.learner = StreamLearner(first, config)
+        n, matched = self._learn(first)
+        self.learner = StreamLearner(matched, config)
         return n
 
     def _relearn(self, frame: StereoFrame, learnt: LearntBackground) -> None:
