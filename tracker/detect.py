@@ -143,6 +143,7 @@ class _PoseMaps:
     low: CorrespondenceMap
     low_fixed: NDArray[np.int16]
     valid_u8: U8
+    half_fixed: NDArray[np.int16]  # low_fixed at every other point, for the exposure's samples
     full: dict[int, _LazyMap] = field(default_factory=dict)
 
 
@@ -215,8 +216,9 @@ class StereoSubtractor:
             low = self.bg.correspondence(0, g, step=self.cfg.stride)
             mx = np.where(low.valid, low.map_x, -10.0).astype(np.float32)
             fixed = cv2.convertMaps(mx, low.map_y, cv2.CV_16SC2, nninterpolation=True)
-            self._maps = _PoseMaps(pose, low, np.asarray(fixed[0], np.int16),  # (h, w, 2) nearest pixels
-                                   low.valid.astype(np.uint8) * np.uint8(255))
+            nearest = np.asarray(fixed[0], np.int16)  # (h, w, 2) nearest pixels
+            self._maps = _PoseMaps(pose, low, nearest, low.valid.astype(np.uint8) * np.uint8(255),
+                                   np.ascontiguousarray(nearest[::2, ::2]))
         return self._maps
 
     def reset_maps(self) -> None:
@@ -321,8 +323,7 @@ class StereoSubtractor:
         self._checked(frame)
         pm, s = self.maps(frame.gimbal), 2 * self.cfg.stride
         key = frame.left[::s, ::s]
-        at = np.ascontiguousarray(pm.low_fixed[::2, ::2])
-        ref = cv2.remap(frame.right, at, None, cv2.INTER_NEAREST)  # type: ignore[call-overload]
+        ref = cv2.remap(frame.right, pm.half_fixed, None, cv2.INTER_NEAREST)  # type: ignore[call-overload]
         valid = pm.valid_u8
         if self._objects_low is not None:  # not on the last frame's objects, nor 8 px about them
             valid = np.asarray(cv2.bitwise_and(valid, cv2.bitwise_not(cv2.dilate(self._objects_low, _NEAR_OBJECTS))),
