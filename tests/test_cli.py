@@ -51,6 +51,9 @@ def test_eval_writes_a_row_per_visible_frame_that_adds_up_to_the_report(tmp_path
     for r in seen:  # each normalised error is its error over its 1-sigma, as the report counts them
         assert r["z_r"] == pytest.approx(r["error_r_m"] / r["sigma_r_m"], rel=1e-3, abs=1e-4)
         assert r["error_r_m"] == pytest.approx(r["r_m"] - r["truth_r_m"], abs=2e-6)
+        # the ball's seen face lies before its centre, and the range's disparity 1-σ holds the matcher's own
+        assert r["truth_surface_disparity_px"] > r["truth_disparity_px"]
+        assert r["sigma_d_px"] >= r["disparity_sigma_px"] > 0
     assert np.mean([r["z_r"] ** 2 for r in seen]) == pytest.approx(rep["range_nees"], rel=1e-3)
     assert np.mean([abs(r["z_elevation"]) <= 1 for r in seen]) == pytest.approx(rep["elevation_within_1sigma"])
     assert not list(tmp_path.glob(".*.tmp"))  # written through a file beside it, renamed

@@ -215,18 +215,24 @@ def score_frame(acc: _Acc, res: FrameResult, truth: FrameTruth, pipe: Pipeline, 
     acc.z_az.append(float(np.radians(acc.az[-1])) / max(loc.sigma_theta, tiny))
     acc.z_el.append(float(np.radians(acc.el[-1])) / max(loc.sigma_phi, tiny))
     if acc.rows is not None:
-        acc.rows.append(frame_row(res.index, truth.t, det, (r_t, th_t, ph_t, float(d_true[0])), acc, wide))
+        d_seen = None  # the disparity of the mean point of the surface the left camera sees (bodies)
+        if tt.surface_world is not None:
+            R_wr = gimbal_rotation(truth.gimbal.pan_deg, truth.gimbal.tilt_deg)
+            d_seen = float(rect.rig_to_rect((R_wr.T @ tt.surface_world)[None, :])[2][0])
+        acc.rows.append(frame_row(res.index, truth.t, det, (r_t, th_t, ph_t, float(d_true[0]), d_seen), acc, wide))
 
 
-def frame_row(index: int, t: float, det: Detection, truth: tuple[float, float, float, float], acc: _Acc,
-              wide: bool) -> dict[str, object]:
+def frame_row(index: int, t: float, det: Detection, truth: tuple[float, float, float, float, float | None],
+              acc: _Acc, wide: bool) -> dict[str, object]:
     """A detected frame's row (`tmeye eval --frames-out`): what the tracker reported with its 1-σ, the truth
-    (r, θ, φ of the volume centre about the origin, its disparity), the errors and normalised errors
-    (error / 1-σ, as `sigma_consistency` counts them), the blob (box, area, disparity, its matcher's 1-σ,
-    the background's disparity), the centroid's distance from the true silhouette's (raw left px) and, where
-    the body is wider than WIDE_PX, the angle errors against its seen surface. Lengths m, angles deg."""
+    (r, θ, φ of the volume centre about the origin, its disparity, and for a body the disparity of the mean
+    point of the surface the left camera sees, what the disparity measures), the errors and normalised errors
+    (error / 1-σ, as `sigma_consistency` counts them), the blob (box, area, disparity, its matcher's own 1-σ
+    and the whole 1-σ the range was given, the background's disparity), the centroid's distance from the
+    true silhouette's (raw left px) and, where the body is wider than WIDE_PX, the angle errors against its
+    seen surface. Lengths m, angles deg, disparities px."""
     loc, b = det.loc, det.blob
-    r_t, th_t, ph_t, d_t = truth
+    r_t, th_t, ph_t, d_t, d_seen = truth
     row: dict[str, object] = {
         "frame": index, "t_s": t, "detected": True, "track_id": det.track_id,
         "r_m": loc.r, "theta_deg": float(np.degrees(loc.theta)), "phi_deg": float(np.degrees(loc.phi)),
@@ -235,9 +241,12 @@ def frame_row(index: int, t: float, det: Detection, truth: tuple[float, float, f
         "truth_r_m": r_t, "truth_theta_deg": float(np.degrees(th_t)), "truth_phi_deg": float(np.degrees(ph_t)),
         "error_r_m": acc.rng[-1], "error_azimuth_deg": acc.az[-1], "error_elevation_deg": acc.el[-1],
         "z_r": acc.z_r[-1], "z_azimuth": acc.z_az[-1], "z_elevation": acc.z_el[-1],
-        "disparity_px": b.disparity, "disparity_sigma_px": b.disparity_sigma, "truth_disparity_px": d_t,
+        "disparity_px": b.disparity, "disparity_sigma_px": b.disparity_sigma, "sigma_d_px": loc.sigma_d_px,
+        "truth_disparity_px": d_t,
         "background_disparity_px": b.bg_disparity, "area_px": b.area, "box_px": [int(v) for v in b.box],
         "centroid_error_px": acc.cen[-1], "one_camera": b.one_camera}
+    if d_seen is not None:
+        row["truth_surface_disparity_px"] = d_seen
     if wide:
         row["azimuth_surface_error_deg"], row["elevation_surface_error_deg"] = acc.wide[-1][2:4]
     return {k: (round(v, 6) if isinstance(v, float) else v) for k, v in row.items()}

@@ -8,7 +8,7 @@ r = |p|, θ = atan2(x, z) (positive to the right), φ = atan2(-y, √(x² + z²)
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -60,7 +60,9 @@ class Localization:
     """A target's position: rig and world frames (m), covariance in the world frame (m², (3, 3)),
     and r (m), θ, φ (rad) about the origin with their 1-σ; measured_world: the world point (m, (3,)) on the
     ray of the centroid as measured, at the same depth: `world` but for an upright body's shift up to its
-    volume centre (SolidPrior.upright_shift), the point the angles the cameras measure are judged on."""
+    volume centre (SolidPrior.upright_shift), the point the angles the cameras measure are judged on;
+    sigma_d_px: the whole 1-σ (px) the disparity was given (its matcher's or its parts', the sub-pixel
+    phase's and the calibration's; None where the point was not located from a disparity)."""
 
     rig: F64
     world: F64
@@ -72,6 +74,7 @@ class Localization:
     sigma_theta: float
     sigma_phi: float
     measured_world: F64 | None = None
+    sigma_d_px: float | None = None
 
 
 class Localizer:
@@ -150,7 +153,7 @@ class Localizer:
         if behind is not None:
             X_meas = self._behind_face(X_meas, cov_rig, behind)[0]
             X_rig, cov_rig = self._behind_face(X_rig, cov_rig, behind)
-        return self._in_world(X_rig, cov_rig, X_meas, gimbal)
+        return replace(self._in_world(X_rig, cov_rig, X_meas, gimbal), sigma_d_px=float(np.sqrt(S[2, 2])))
 
     def _in_world(self, X_rig: F64, cov_rig: F64, X_meas: F64, gimbal: GimbalState | None) -> Localization:
         """The Localization of a rig point (3,) with its covariance (3, 3) and its measured point: turned
