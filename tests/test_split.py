@@ -167,7 +167,7 @@ def test_a_slanted_near_face_is_matched_on_a_narrower_window(monkeypatch: pytest
     obj = np.ones((120, 120), bool)
     fit = v.match_object(frame, box, obj, 60.0)
     assert fit is not None and abs(fit.disparity - 60.0) < 1.5
-    monkeypatch.setattr(verify, "_MATCH_HALF_SLANT", verify._MATCH_HALF)
+    monkeypatch.setattr(verify, "_MATCH_HALF_SLANT", verify.MATCH_HALF)
     assert v.match_object(frame, box, obj, 60.0) is None
 
 

@@ -47,7 +47,7 @@ from tracker.results import Blob
 from tracker.rim import DEFAULT_RIM, RimConfig, RimRecovery
 from tracker.split import join, own_pixels, same_body
 from tracker.stereo import RegionMatch
-from tracker.strips import MIN_SCORE, Strips
+from tracker.strips import MATCH_HALF, MIN_SCORE, Strips, first_window
 from tracker.visibility import with_objects
 
 U8 = NDArray[np.uint8]
@@ -56,7 +56,6 @@ F32 = NDArray[np.float32]
 BoolA = NDArray[np.bool_]
 
 
-_MATCH_HALF = (24, 16)  # half width and height (px) of the largest window matched
 _MATCH_HALF_SLANT = (12, 8)  # the same when the larger ones match nowhere (slanted faces, near)
 _PART_TRIES = 2  # regions of a box verified as parts of a body found before (tracker.split.same_body)
 _SEARCH_RADIUS = 4  # px about a disparity that refining from failed to match (Verifier.search_radius)
@@ -292,7 +291,7 @@ class Verifier:
         d0 = self._coarse_disparity(frame, box, obj, d0)
         if d0 is None:
             return None
-        for half in (_MATCH_HALF, _MATCH_HALF_SLANT):
+        for half in (first_window(obj), _MATCH_HALF_SLANT):
             for part in row_thirds(obj):
                 strips = self._strips(frame, box, part, d0, half)
                 fine = None if strips is None else strips.match(part, d0, radius, tracked)
@@ -311,9 +310,9 @@ class Verifier:
 
     def part_fits(self, frame: StereoFrame, blob: Blob) -> list[tuple[float, float]]:
         """The disparities (px) and 1-σ (px) of the parts of a verified blob (tracker.disparity_sigma.part_fits:
-        the window `match_object` uses cut into a grid, each part refined from the blob's disparity on the
-        same strips); the parts that do not match are left out."""
-        strips = self._strips(frame, blob.box, blob.mask, blob.disparity)
+        the window `match_object` uses first cut into a grid, each part refined from the blob's disparity on
+        the same strips); the parts that do not match are left out."""
+        strips = self._strips(frame, blob.box, blob.mask, blob.disparity, first_window(blob.mask))
         if strips is None:
             return []
         return part_fits(strips.left, strips.right, strips.core(blob.mask), strips.off, blob.disparity, MIN_SCORE)
@@ -349,7 +348,7 @@ class Verifier:
         return None
 
     def _strips(self, frame: StereoFrame, box: Box, region: BoolA, d_hint: float | None,
-                half: tuple[int, int] = _MATCH_HALF) -> Strips | None:
+                half: tuple[int, int] = MATCH_HALF) -> Strips | None:
         """Rectified left/right strips around a region's rows, wide enough for the disparity search; the
         window matched is the region's central 2 half[0] x 2 half[1] px at most."""
         rect, cfg = self.rect, self.cfg
@@ -364,8 +363,9 @@ class Verifier:
         w, h = rect.rig.left.size
         rx0, ry0 = int(np.floor(rc[:, 0].min())), max(int(np.floor(rc[:, 1].min())), 0)
         rx1, ry1 = int(np.ceil(rc[:, 0].max())) + 1, min(int(np.ceil(rc[:, 1].max())) + 1, h)
-        # a large object is matched on a central window only: its disparity is then already far more
-        # precise than its range needs (the range error grows as z², the object shrinks as 1/z)
+        # a large object is matched on a central window only (`half`; a person on its whole outline,
+        # first_window): its disparity is then already far more precise than its range needs (the range
+        # error grows as z², the object shrinks as 1/z)
         cx, cy = (rx0 + rx1) // 2, (ry0 + ry1) // 2
         rx0, rx1 = max(rx0, cx - half[0]), min(rx1, cx + half[0])
         ry0, ry1 = max(ry0, cy - half[1]), min(ry1, cy + half[1])
