@@ -205,10 +205,10 @@ def score_frame(acc: _Acc, res: FrameResult, truth: FrameTruth, pipe: Pipeline, 
     acc.az.append(_deg(loc.theta - th_t))
     acc.el.append(float(np.degrees(loc.phi - ph_t)))
     wide = tt.surface_world is not None and _width_px(truth.ids_left, tt.target_id) > WIDE_PX
+    R_wr = gimbal_rotation(truth.gimbal.pan_deg, truth.gimbal.tilt_deg)
     if wide:
         meas = loc.world if loc.measured_world is None else loc.measured_world  # no upright shift
-        g = truth.gimbal
-        c = gimbal_rotation(g.pan_deg, g.tilt_deg) @ rect.rig.left.c  # the left lens centre, world frame
+        c = R_wr @ rect.rig.left.c  # the left lens centre, world frame
         acc.wide.append(_wide_errors(acc.az[-1], acc.el[-1], (c, meas - c), tt, pipe.localizer.origin))
     tiny = 1e-12  # a zero σ makes any error infinitely many σ
     acc.z_r.append((loc.r - r_t) / max(loc.sigma_r, tiny))
@@ -217,7 +217,6 @@ def score_frame(acc: _Acc, res: FrameResult, truth: FrameTruth, pipe: Pipeline, 
     if acc.rows is not None:
         d_seen = None  # the disparity of the mean point of the surface the left camera sees (bodies)
         if tt.surface_world is not None:
-            R_wr = gimbal_rotation(truth.gimbal.pan_deg, truth.gimbal.tilt_deg)
             d_seen = float(rect.rig_to_rect((R_wr.T @ tt.surface_world)[None, :])[2][0])
         acc.rows.append(frame_row(res.index, truth.t, det, (r_t, th_t, ph_t, float(d_true[0]), d_seen), acc, wide))
 

@@ -8,7 +8,7 @@ r = |p|, θ = atan2(x, z) (positive to the right), φ = atan2(-y, √(x² + z²)
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
@@ -153,9 +153,10 @@ class Localizer:
         if behind is not None:
             X_meas = self._behind_face(X_meas, cov_rig, behind)[0]
             X_rig, cov_rig = self._behind_face(X_rig, cov_rig, behind)
-        return replace(self._in_world(X_rig, cov_rig, X_meas, gimbal), sigma_d_px=float(np.sqrt(S[2, 2])))
+        return self._in_world(X_rig, cov_rig, X_meas, gimbal, float(np.sqrt(S[2, 2])))
 
-    def _in_world(self, X_rig: F64, cov_rig: F64, X_meas: F64, gimbal: GimbalState | None) -> Localization:
+    def _in_world(self, X_rig: F64, cov_rig: F64, X_meas: F64, gimbal: GimbalState | None,
+                  sigma_d_px: float | None = None) -> Localization:
         """The Localization of a rig point (3,) with its covariance (3, 3) and its measured point: turned
         by the gimbal into the world frame, eq. (1)'s r, θ, φ about the origin with their 1-σ."""
         g = gimbal or GimbalState()
@@ -167,7 +168,7 @@ class Localizer:
         Js = spherical_jacobian(rel)
         cs = Js @ cov_w @ Js.T
         sr, st, sp = (float(np.sqrt(max(cs[i, i], 0.0))) for i in range(3))
-        return Localization(X_rig, X_w, cov_w, r, th, ph, sr, st, sp, R_wr @ X_meas)
+        return Localization(X_rig, X_w, cov_w, r, th, ph, sr, st, sp, R_wr @ X_meas, sigma_d_px)
 
     def _below_top(self, top_px: float, disparity: float, behind_px: float,
                    stature: tuple[float, float] | None = None) -> tuple[float, float]:

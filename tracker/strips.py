@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tracker.rectify import Rectifier
+from tracker.solid_prior import SolidPrior
 from tracker.stereo import RegionMatch, match_region, refine_region, zncc_weighted
 
 U8 = NDArray[np.uint8]
@@ -34,12 +35,12 @@ WHOLE_MARGIN = 0.1
 
 MATCH_HALF = (24, 16)  # half width and height (px) of the largest window matched (first_window: not a person's)
 _WHOLE = (1 << 16, 1 << 16)  # a half window that holds any region: its whole outline
-_UPRIGHT_ASPECT = 1.5  # a person's outline: at least this many times as high as wide (SolidPrior.upright_aspect)
+_PERSON = SolidPrior()  # what counts as a person's outline (SolidPrior.upright)
 
 
 def first_window(obj: BoolA) -> tuple[int, int]:
     """The half window (px, width and height) a region's disparity is matched on first: an upright region's
-    (a person's: at least _UPRIGHT_ASPECT times as high as wide) whole outline, any other's central
+    (a person's, SolidPrior.upright: at least 1.5 times as high as wide) whole outline, any other's central
     MATCH_HALF. The parts of a person lie at depths within a few centimetres of each other, but the
     disparity matched on a window of them is off the whole seen surface's by an error that belongs to the
     pixels matched (their texture and the interpolation): on endless:body frame 1846, a walker standing at
@@ -53,7 +54,7 @@ def first_window(obj: BoolA) -> tuple[int, int]:
     instead made the car's (a side whose disparity varies across it) azimuth 0.317 -> 0.785° and the near
     ball's elevation 0.015 -> 0.042° (approach:body, 0.9-1.3 m): they keep the central window."""
     _, _, w, h = cv2.boundingRect(obj.view(np.uint8))
-    return _WHOLE if h >= _UPRIGHT_ASPECT * w else MATCH_HALF
+    return _WHOLE if _PERSON.upright(float(w), float(h)) else MATCH_HALF
 
 
 @dataclass(frozen=True)
