@@ -9,10 +9,13 @@ from tracker.disparity_sigma import (
     FEW_PARTS_FACTOR,
     MIN_PARTS,
     ROWS,
+    on_surface,
     part_fits,
     parts_sigma,
     scatter_sigma,
+    surface_mean,
 )
+from tracker.results import Blob
 from tracker.stereo import refine_region
 
 
@@ -41,7 +44,7 @@ def test_the_whole_fit_leans_on_its_best_textured_parts_and_is_as_uncertain_as_t
 def _disparities(left: np.ndarray, right: np.ndarray, core: np.ndarray, off: int, d: float, min_score: float
                  ) -> list[float]:
     """The parts' disparities of part_fits (their own 1-σ left out)."""
-    return [p for p, _ in part_fits(left, right, core, off, d, min_score)]
+    return [p.d for p in part_fits(left, right, core, off, d, min_score)]
 
 
 def _pair(slope: float) -> tuple[np.ndarray, np.ndarray]:
@@ -105,3 +108,48 @@ def test_too_few_parts_stand_for_twice_the_matchers_sigma_and_the_phase_term_is_
     z = rect.f * rect.rig.baseline / 10.0  # σ_Z = Z² / (f b) σ_d with σ_d = √(0.02² + 0.012²) at the floor
     expected = z * z / (rect.f * rect.rig.baseline) * float(np.hypot(0.02, PHASE_SIGMA_PX))
     assert abs(loc.sigma_r - expected) < 0.05 * expected
+
+
+
+def _two_depths(contrast_right: float) -> tuple[np.ndarray, np.ndarray]:
+    """A surface whose left half (columns under 80 of the left image) lies at a disparity of 10 px and right
+    half at 10.6 px (a walker's arm before its torso), the right half's texture `contrast_right` times as
+    contrasted as the left's: the left and right images (120, 160) uint8."""
+    rng = np.random.default_rng(5)
+    u = np.arange(0, 192, 0.25)  # surface points, by the left image's column they are seen at
+    tex = np.array([np.interp(u, np.arange(192), row) for row in
+                    np.repeat(np.repeat(rng.uniform(-90, 90, (64, 64)), 3, axis=0), 3, axis=1)[:120]])
+    tex[:, u >= 80] *= contrast_right
+    xs = np.arange(160, dtype=float)
+    d = np.where(u >= 80, 10.6, 10.0)
+    left = np.array([np.interp(xs, u, row) for row in tex]) + 128
+    right = np.array([np.interp(xs, u - d, row) for row in tex]) + 128  # point u is seen at u - d on the right
+    return left.clip(0, 255).astype(np.uint8), right.clip(0, 255).astype(np.uint8)
+
+
+def test_a_persons_disparity_is_its_parts_mean_by_pixels_not_its_best_textured_parts() -> None:
+    """Half the region at 10 px, half at 10.6 px, the nearer half's texture half as contrasted: the one fit
+    over the whole region lies near 10.1 px (the gradients weigh it), the seen surface's mean point at
+    10.3 px; surface_mean, the parts' mean weighted by their pixel counts, finds it."""
+    left, right = _two_depths(0.5)
+    core = np.ones((40, 48), np.uint8)  # rows 40..80, columns 56..104: half each side of column 80
+    whole = refine_region(left, right, core, 56, 40, 10.0, min_score=0.5)
+    assert whole is not None and abs(whole.disparity - 10.3) > 0.15
+    fits = part_fits(left[40:80], right[40:80], core, 56, whole.disparity, 0.5)
+    assert len(fits) == COLUMNS * ROWS and {f.pixels for f in fits} == {240}
+    mean = surface_mean(fits)
+    assert mean is not None and abs(mean[0] - 10.3) < 0.03
+    # its 1-σ: the standard error of an equally weighted mean (equal pixel counts), s / √n
+    assert np.isclose(mean[1], np.std([f.d for f in fits], ddof=1) / np.sqrt(len(fits)))
+    assert surface_mean(fits[:MIN_PARTS - 1]) is None  # too few parts to tell: none
+
+
+def test_on_surface_moves_the_blobs_disparity_and_keeps_its_parts() -> None:
+    left, right = _two_depths(0.5)
+    fits = part_fits(left[40:80], right[40:80], np.ones((40, 48), np.uint8), 56, 10.0, 0.5)
+    blob = Blob((0, 0, 48, 40), np.ones((40, 48), bool), 1920, np.zeros(2), np.zeros(2), 10.0, 0.01, 5.0, 0.9)
+    moved = on_surface(blob, fits)
+    mean = surface_mean(fits)
+    assert mean is not None and moved.disparity == mean[0] and moved.parts == tuple(fits)
+    assert moved.disparity_sigma == blob.disparity_sigma  # the matcher's own σ stays the matcher's
+    assert on_surface(blob, fits[:MIN_PARTS - 1]) is blob

@@ -243,6 +243,7 @@ def frame_row(index: int, t: float, det: Detection, truth: tuple[float, float, f
         "disparity_px": b.disparity, "disparity_sigma_px": b.disparity_sigma, "sigma_d_px": loc.sigma_d_px,
         "truth_disparity_px": d_t,
         "background_disparity_px": b.bg_disparity, "area_px": b.area, "box_px": [int(v) for v in b.box],
+        "extent_px": list(cv2.boundingRect(b.mask.view(np.uint8))[2:]),
         "centroid_error_px": acc.cen[-1], "one_camera": b.one_camera}
     if d_seen is not None:
         row["truth_surface_disparity_px"] = d_seen

@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from tracker.bgdepth import BackgroundDepth, CorrespondenceMap
 from tracker.bglearn import LearntBackground, Sighting, StreamLearnConfig, StreamLearner, changed_box
 from tracker.detect import Box, DetectorConfig, StereoSubtractor
-from tracker.disparity_sigma import parts_sigma
+from tracker.disparity_sigma import PartFit, on_surface, parts_sigma, surface_mean
 from tracker.egomotion import PoseCompensation
 from tracker.frames import StereoFrame
 from tracker.geometry import StereoRig
@@ -42,6 +42,7 @@ from tracker.schedule import SigmaSchedule, SigmaTerms, VerifySchedule
 from tracker.segmentation import ExtentHistory, HeightHistory, outer_runs, outline_sigma_px
 from tracker.solid_prior import SolidPrior
 from tracker.split import join_occluded, join_parts
+from tracker.strips import whole_outline
 from tracker.temporal import TemporalConfig, TemporalDetector, without_duplicates
 from tracker.tracks import MultiTracker, TrackerConfig
 from tracker.verify import Verifier
@@ -169,6 +170,7 @@ class Pipeline:
         blobs = self.temporal.detect(frame, blobs, hints, cache(partial(self._coasting, frame)))
         blobs = join_occluded(blobs, lambda box: self._background_disparity(frame, box),  # one body, two sides
                               self.subtractor.cfg.min_depth_gap, self.rect.area_moments)
+        blobs = [self._on_surface(frame, b) for b in blobs]
         t2 = time.perf_counter()
         obs = np.array([[b.centroid_raw[0], b.centroid_raw[1], b.disparity] for b in blobs]).reshape(-1, 3)
         # from centroids and disparities alone (not their σ), as seen at home: the mount's turning taken out
@@ -316,6 +318,13 @@ class Pipeline:
             return hints
         return np.vstack([hints, self.ego.from_home(found[1], frame.gimbal)])
 
+    def _on_surface(self, frame: StereoFrame, b: Blob) -> Blob:
+        """A person's blob with its disparity at its seen surface's mean point, from the parts of its whole
+        outline (tracker.disparity_sigma.surface_mean); any other blob as it is."""
+        if b.one_camera or not whole_outline(b.mask):
+            return b
+        return on_surface(b, self.verifier.part_fits(frame, b))
+
     def _disparity_sigma(self, frame: StereoFrame, b: Blob) -> float:
         """The scatter of the disparities of the blob's parts (px; tracker.disparity_sigma: correlated
         residuals, interpolation, a slanted surface; it includes the pixel noise the matcher's σ stands
@@ -323,8 +332,11 @@ class Pipeline:
         matcher's own. A blob seen by one camera has its held disparity's 1-σ (tracker.one_camera)."""
         if b.one_camera:
             return b.disparity_sigma
+        mean = surface_mean([PartFit(*p) for p in b.parts])
+        if mean is not None:  # a person's, its parts' mean
+            return mean[1]
         fits = self.verifier.part_fits(frame, b)
-        return parts_sigma([d for d, _ in fits], b.disparity_sigma, [s for _, s in fits])
+        return parts_sigma([f.d for f in fits], b.disparity_sigma, [f.sigma for f in fits])
 
     def _centroid_extra(self, frame: StereoFrame, b: Blob, blobs: list[Blob], track_id: int | None,
                         ring: tuple[BoolA, Box, CorrespondenceMap]

@@ -21,7 +21,9 @@ class Blob:
     """A verified object in one frame. box: raw-left pixels (x0, y0, x1, y1); mask: bool (y1-y0, x1-x0);
     centroid_raw: eq. (10) in raw left pixels; centroid_rect: the same pixels' centroid in rectified
     coordinates; disparity, disparity_sigma, bg_disparity in px (rectified); one_camera: seen by the left
-    camera alone, its disparity the one a track holds (tracker.one_camera)."""
+    camera alone, its disparity the one a track holds (tracker.one_camera); parts: where the disparity is its
+    seen surface's mean from the parts of a person's outline (tracker.disparity_sigma.surface_mean), those
+    parts (d px, own 1-σ px, pixel count) each, else empty."""
 
     box: Box
     mask: BoolA
@@ -34,6 +36,7 @@ class Blob:
     score: float
     gain: float = 1.0
     one_camera: bool = False
+    parts: tuple[tuple[float, float, int], ...] = ()
 
 
 @dataclass(frozen=True)

@@ -53,8 +53,13 @@ def first_window(obj: BoolA) -> tuple[int, int]:
     two-targets 0.099 -> 0.091, pan 0.077 -> 0.074, endless 0.393 -> 0.388. The whole of every region
     instead made the car's (a side whose disparity varies across it) azimuth 0.317 -> 0.785° and the near
     ball's elevation 0.015 -> 0.042° (approach:body, 0.9-1.3 m): they keep the central window."""
+    return _WHOLE if whole_outline(obj) else MATCH_HALF
+
+
+def whole_outline(obj: BoolA) -> bool:
+    """Whether a region's disparity is matched over its whole outline (first_window): it is upright."""
     _, _, w, h = cv2.boundingRect(obj.view(np.uint8))
-    return _WHOLE if _PERSON.upright(float(w), float(h)) else MATCH_HALF
+    return _PERSON.upright(float(w), float(h))
 
 
 @dataclass(frozen=True)

@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 
 from tracker.bgdepth import CorrespondenceMap
 from tracker.detect import Box, StereoSubtractor
-from tracker.disparity_sigma import part_fits
+from tracker.disparity_sigma import PartFit, part_fits
 from tracker.frames import StereoFrame
 from tracker.growth import grow_tracked
 from tracker.masks import (
@@ -308,7 +308,7 @@ class Verifier:
             fine = self.match_object(frame, box, whole, d0, radius, tracked)
         return fine
 
-    def part_fits(self, frame: StereoFrame, blob: Blob) -> list[tuple[float, float]]:
+    def part_fits(self, frame: StereoFrame, blob: Blob) -> list[PartFit]:
         """The disparities (px) and 1-σ (px) of the parts of a verified blob (tracker.disparity_sigma.part_fits:
         the window `match_object` uses first cut into a grid, each part refined from the blob's disparity on
         the same strips); the parts that do not match are left out."""
