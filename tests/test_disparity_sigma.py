@@ -9,6 +9,8 @@ from tracker.disparity_sigma import (
     FEW_PARTS_FACTOR,
     MIN_PARTS,
     ROWS,
+    PartFit,
+    blob_sigma,
     on_surface,
     part_fits,
     parts_sigma,
@@ -144,12 +146,27 @@ def test_a_persons_disparity_is_its_parts_mean_by_pixels_not_its_best_textured_p
     assert surface_mean(fits[:MIN_PARTS - 1]) is None  # too few parts to tell: none
 
 
-def test_on_surface_moves_the_blobs_disparity_and_keeps_its_parts() -> None:
+def test_on_surface_moves_a_persons_disparity_and_keeps_its_parts() -> None:
     left, right = _two_depths(0.5)
     fits = part_fits(left[40:80], right[40:80], np.ones((40, 48), np.uint8), 56, 10.0, 0.5)
-    blob = Blob((0, 0, 48, 40), np.ones((40, 48), bool), 1920, np.zeros(2), np.zeros(2), 10.0, 0.01, 5.0, 0.9)
-    moved = on_surface(blob, fits)
+
+    def blob(w: int, h: int, one_camera: bool = False) -> Blob:
+        return Blob((0, 0, w, h), np.ones((h, w), bool), w * h, np.zeros(2), np.zeros(2), 10.0, 0.01, 5.0, 0.9,
+                    one_camera=one_camera)
+
+    person = blob(40, 100)  # upright: a person's outline
+    moved = on_surface(person, lambda: fits)
     mean = surface_mean(fits)
     assert mean is not None and moved.disparity == mean[0] and moved.parts == tuple(fits)
-    assert moved.disparity_sigma == blob.disparity_sigma  # the matcher's own σ stays the matcher's
-    assert on_surface(blob, fits[:MIN_PARTS - 1]) is blob
+    assert moved.disparity_sigma == person.disparity_sigma  # the matcher's own σ stays the matcher's
+    assert on_surface(person, lambda: fits[:MIN_PARTS - 1]) is person
+
+    def never() -> list[PartFit]:
+        raise AssertionError("parts matched again")
+
+    assert blob_sigma(moved, never) == mean[1]  # its 1-σ: its parts' mean's, from the parts it keeps
+
+    for other in (blob(80, 80), blob(40, 100, one_camera=True)):  # a ball; a person seen by one camera
+        assert on_surface(other, never) is other
+    ball = blob(80, 80)
+    assert blob_sigma(ball, lambda: fits) == parts_sigma([f.d for f in fits], 0.01, [f.sigma for f in fits])

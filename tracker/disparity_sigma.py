@@ -24,6 +24,7 @@ approach's far frames had a disparity error of 2.2 times the matcher's σ rms, a
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import replace
 from typing import NamedTuple
 
@@ -32,6 +33,7 @@ from numpy.typing import NDArray
 
 from tracker.results import Blob
 from tracker.stereo import refine_gram
+from tracker.strips import whole_outline
 
 U8 = NDArray[np.uint8]
 COLUMNS, ROWS = 4, 2
@@ -90,11 +92,29 @@ def surface_mean(fits: list[PartFit]) -> tuple[float, float] | None:
     return float(d @ n / n.sum()), scatter_sigma(d.tolist(), (1.0 / np.sqrt(n)).tolist())
 
 
-def on_surface(blob: Blob, fits: list[PartFit]) -> Blob:
-    """The blob with its disparity at its parts' surface_mean and those parts kept (Blob.parts); as it was
-    with fewer than MIN_PARTS parts."""
-    mean = surface_mean(fits)
-    return blob if mean is None else replace(blob, disparity=mean[0], parts=tuple(fits))
+def on_surface(blob: Blob, fits: Callable[[], list[PartFit]]) -> Blob:
+    """A person's blob (its outline upright, tracker.strips.whole_outline; seen by both cameras) with its
+    disparity at its parts' surface_mean and those parts kept (Blob.parts); any other blob, or one with
+    fewer than MIN_PARTS parts, as it is. fits: the parts of the blob's whole outline (part_fits)."""
+    if blob.one_camera or not whole_outline(blob.mask):
+        return blob
+    parts = fits()
+    mean = surface_mean(parts)
+    return blob if mean is None else replace(blob, disparity=mean[0], parts=tuple(parts))
+
+
+def blob_sigma(blob: Blob, fits: Callable[[], list[PartFit]]) -> float:
+    """The disparity's 1-σ (px) from a blob's parts (where larger than the matcher's own, tracker.pipeline):
+    a person's, its parts' surface_mean's (Blob.parts, on_surface); any other's, parts_sigma of fits() (the
+    parts of the window it was matched on). A blob seen by one camera has its held disparity's 1-σ
+    (tracker.one_camera)."""
+    if blob.one_camera:
+        return blob.disparity_sigma
+    mean = surface_mean([PartFit(*p) for p in blob.parts])
+    if mean is not None:
+        return mean[1]
+    parts = fits()
+    return parts_sigma([f.d for f in parts], blob.disparity_sigma, [f.sigma for f in parts])
 
 
 def part_fits(left: U8, right: U8, core: NDArray[np.generic], off: int, d: float,

@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from tracker.bgdepth import BackgroundDepth, CorrespondenceMap
 from tracker.bglearn import LearntBackground, Sighting, StreamLearnConfig, StreamLearner, changed_box
 from tracker.detect import Box, DetectorConfig, StereoSubtractor
-from tracker.disparity_sigma import PartFit, on_surface, parts_sigma, surface_mean
+from tracker.disparity_sigma import blob_sigma, on_surface
 from tracker.egomotion import PoseCompensation
 from tracker.frames import StereoFrame
 from tracker.geometry import StereoRig
@@ -42,7 +42,6 @@ from tracker.schedule import SigmaSchedule, SigmaTerms, VerifySchedule
 from tracker.segmentation import ExtentHistory, HeightHistory, outer_runs, outline_sigma_px
 from tracker.solid_prior import SolidPrior
 from tracker.split import join_occluded, join_parts
-from tracker.strips import whole_outline
 from tracker.temporal import TemporalConfig, TemporalDetector, without_duplicates
 from tracker.tracks import MultiTracker, TrackerConfig
 from tracker.verify import Verifier
@@ -170,7 +169,7 @@ class Pipeline:
         blobs = self.temporal.detect(frame, blobs, hints, cache(partial(self._coasting, frame)))
         blobs = join_occluded(blobs, lambda box: self._background_disparity(frame, box),  # one body, two sides
                               self.subtractor.cfg.min_depth_gap, self.rect.area_moments)
-        blobs = [self._on_surface(frame, b) for b in blobs]
+        blobs = [on_surface(b, partial(self.verifier.part_fits, frame, b)) for b in blobs]  # a person's: its parts'
         t2 = time.perf_counter()
         obs = np.array([[b.centroid_raw[0], b.centroid_raw[1], b.disparity] for b in blobs]).reshape(-1, 3)
         # from centroids and disparities alone (not their σ), as seen at home: the mount's turning taken out
@@ -253,7 +252,8 @@ class Pipeline:
         x0, y0 = box[0], box[1]  # the blob's box within the ring's
         rim, shift = self._rim_px(frame, b, cm.crop((b.box[0] - x0, b.box[1] - y0, b.box[2] - x0, b.box[3] - y0)),
                                   known)
-        return SigmaTerms(self._disparity_sigma(frame, b), extra, gap_x, rim, hidden_below, cut, whole, known, shift)
+        s_d = blob_sigma(b, partial(self.verifier.part_fits, frame, b))  # the parts' scatter
+        return SigmaTerms(s_d, extra, gap_x, rim, hidden_below, cut, whole, known, shift)
 
     def _rim_px(self, frame: StereoFrame, b: Blob, cm: CorrespondenceMap, person: bool = False
                 ) -> tuple[tuple[float, float] | None, tuple[float, float]]:
@@ -317,26 +317,6 @@ class Pipeline:
         if found is None or found[0] != frame.index:
             return hints
         return np.vstack([hints, self.ego.from_home(found[1], frame.gimbal)])
-
-    def _on_surface(self, frame: StereoFrame, b: Blob) -> Blob:
-        """A person's blob with its disparity at its seen surface's mean point, from the parts of its whole
-        outline (tracker.disparity_sigma.surface_mean); any other blob as it is."""
-        if b.one_camera or not whole_outline(b.mask):
-            return b
-        return on_surface(b, self.verifier.part_fits(frame, b))
-
-    def _disparity_sigma(self, frame: StereoFrame, b: Blob) -> float:
-        """The scatter of the disparities of the blob's parts (px; tracker.disparity_sigma: correlated
-        residuals, interpolation, a slanted surface; it includes the pixel noise the matcher's σ stands
-        for), or twice the matcher's own with too few parts: the disparity's 1-σ where larger than the
-        matcher's own. A blob seen by one camera has its held disparity's 1-σ (tracker.one_camera)."""
-        if b.one_camera:
-            return b.disparity_sigma
-        mean = surface_mean([PartFit(*p) for p in b.parts])
-        if mean is not None:  # a person's, its parts' mean
-            return mean[1]
-        fits = self.verifier.part_fits(frame, b)
-        return parts_sigma([f.d for f in fits], b.disparity_sigma, [f.sigma for f in fits])
 
     def _centroid_extra(self, frame: StereoFrame, b: Blob, blobs: list[Blob], track_id: int | None,
                         ring: tuple[BoolA, Box, CorrespondenceMap]
