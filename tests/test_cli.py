@@ -54,8 +54,8 @@ def test_eval_writes_a_row_per_visible_frame_that_adds_up_to_the_report(tmp_path
         # the ball's seen face lies before its centre, and the range's disparity 1-σ holds the matcher's own
         assert r["truth_surface_disparity_px"] > r["truth_disparity_px"]
         assert r["sigma_d_px"] >= r["disparity_sigma_px"] > 0
-        w, h = r["extent_px"]  # the ball's outline: about as wide as high, within its box
-        assert 0.7 < w / h < 1.4 and w <= r["box_px"][2] - r["box_px"][0] and h <= r["box_px"][3] - r["box_px"][1]
+        w, h = r["extent_px"]  # the ball's outline (radius 0.3 m, 600 px focal length): as wide as high as it is
+        assert abs(w - h) <= 2 and abs(w - 600 * 0.6 / r["truth_r_m"]) <= 0.1 * w + 1.5
     assert np.mean([r["z_r"] ** 2 for r in seen]) == pytest.approx(rep["range_nees"], rel=1e-3)
     assert np.mean([abs(r["z_elevation"]) <= 1 for r in seen]) == pytest.approx(rep["elevation_within_1sigma"])
     assert not list(tmp_path.glob(".*.tmp"))  # written through a file beside it, renamed

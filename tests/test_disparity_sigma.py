@@ -159,14 +159,27 @@ def test_on_surface_moves_a_persons_disparity_and_keeps_its_parts() -> None:
     mean = surface_mean(fits)
     assert mean is not None and moved.disparity == mean[0] and moved.parts == tuple(fits)
     assert moved.disparity_sigma == person.disparity_sigma  # the matcher's own σ stays the matcher's
-    assert on_surface(person, lambda: fits[:MIN_PARTS - 1]) is person
+    few = on_surface(person, lambda: fits[:MIN_PARTS - 1])  # too few to tell: its disparity stays, its parts kept
+    assert few.disparity == person.disparity and few.parts == tuple(fits[:MIN_PARTS - 1])
 
     def never() -> list[PartFit]:
         raise AssertionError("parts matched again")
 
     assert blob_sigma(moved, never) == mean[1]  # its 1-σ: its parts' mean's, from the parts it keeps
+    assert blob_sigma(few, never) == FEW_PARTS_FACTOR * 0.01  # too few: twice the matcher's, not matched again
 
     for other in (blob(80, 80), blob(40, 100, one_camera=True)):  # a ball; a person seen by one camera
         assert on_surface(other, never) is other
     ball = blob(80, 80)
     assert blob_sigma(ball, lambda: fits) == parts_sigma([f.d for f in fits], 0.01, [f.sigma for f in fits])
+
+
+def test_the_surface_mean_weighs_each_part_by_its_pixels() -> None:
+    """Parts of unequal size (a walker's legs cut by the ground, its head small): each counts by its pixels,
+    and the mean's 1-σ is the standard error of that weighted mean, s √Σ w², w_i = n_i / Σ n_i."""
+    d = [10.0, 10.2, 9.8, 10.1, 9.9, 10.0, 10.3, 9.7]
+    n = [400, 400, 100, 100, 400, 400, 50, 50]
+    mean = surface_mean([PartFit(di, 0.01, ni) for di, ni in zip(d, n, strict=True)])
+    w = np.array(n) / sum(n)
+    assert mean is not None and np.isclose(mean[0], float(w @ d)) and not np.isclose(mean[0], np.mean(d))
+    assert np.isclose(mean[1], np.std(d, ddof=1) * np.sqrt(np.sum(w * w)))

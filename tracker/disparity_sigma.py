@@ -12,8 +12,14 @@ matcher's 1-σ (0.026 and 0.137 px rms against 0.008 and 0.006 px).
 
 All of these show in how the disparities of parts of the region disagree: the region is cut into a grid of
 `COLUMNS` x `ROWS` parts over the window the matcher uses, each part refined on its own, and
-the standard error of their mean, s / √n (s their sample standard deviation, n the parts matched), is the
-1-σ of the whole region's disparity: the whole's fit is about their mean. The grid has 8 parts so that the
+the standard error of their mean, s √Σ w_i² (s their sample standard deviation, w_i their weights: s / √n
+with n parts alike), is the 1-σ of the region's disparity. For most regions that disparity is the one fit
+over the window, about the parts' information-weighted mean (scatter_sigma); for a person's region it is
+the parts' mean weighted by their pixel counts itself (surface_mean, on_surface: the mean of the surface
+seen, where the one fit leans on the best-textured parts). The spread s also holds real differences of
+depth between the parts (an arm before the torso), which are no error of their mean: where they are large
+the 1-σ is wider than the mean's error, where a person stands still and its parts agree it may be
+narrower (endless:body's standing walkers, 29 % within 1σ; docs/evaluation.md). The grid has 8 parts so that the
 σ estimate itself is not too noisy (with 4 parts the normalised errors follow Student's t with 3 degrees
 of freedom, whose variance is 3). Where fewer than MIN_PARTS parts match (a far target, about 36 px wide
 at 20 to 30 m in approach), the scatter cannot be told; the matcher's own σ times FEW_PARTS_FACTOR, the
@@ -93,27 +99,30 @@ def surface_mean(fits: list[PartFit]) -> tuple[float, float] | None:
 
 
 def on_surface(blob: Blob, fits: Callable[[], list[PartFit]]) -> Blob:
-    """A person's blob (its outline upright, tracker.strips.whole_outline; seen by both cameras) with its
-    disparity at its parts' surface_mean and those parts kept (Blob.parts); any other blob, or one with
-    fewer than MIN_PARTS parts, as it is. fits: the parts of the blob's whole outline (part_fits)."""
+    """A person's blob (its outline upright, tracker.strips.whole_outline; seen by both cameras) with the
+    parts of its whole outline (fits(): part_fits) kept on it (Blob.parts) and its disparity at their
+    surface_mean (as it was with fewer than MIN_PARTS parts); any other blob as it is."""
     if blob.one_camera or not whole_outline(blob.mask):
         return blob
     parts = fits()
     mean = surface_mean(parts)
-    return blob if mean is None else replace(blob, disparity=mean[0], parts=tuple(parts))
+    if mean is None:
+        return replace(blob, parts=tuple(parts))
+    return replace(blob, disparity=mean[0], parts=tuple(parts))
 
 
 def blob_sigma(blob: Blob, fits: Callable[[], list[PartFit]]) -> float:
     """The disparity's 1-σ (px) from a blob's parts (where larger than the matcher's own, tracker.pipeline):
-    a person's, its parts' surface_mean's (Blob.parts, on_surface); any other's, parts_sigma of fits() (the
-    parts of the window it was matched on). A blob seen by one camera has its held disparity's 1-σ
-    (tracker.one_camera)."""
+    a person's, from the parts it keeps (Blob.parts, on_surface): their surface_mean's, or with fewer than
+    MIN_PARTS parts_sigma's stand-in; any other's, parts_sigma of fits() (the parts of the window it was
+    matched on). A blob seen by one camera has its held disparity's 1-σ (tracker.one_camera)."""
     if blob.one_camera:
         return blob.disparity_sigma
-    mean = surface_mean([PartFit(*p) for p in blob.parts])
-    if mean is not None:
-        return mean[1]
-    parts = fits()
+    if blob.parts:
+        mean = surface_mean([PartFit(*p) for p in blob.parts])
+        if mean is not None:
+            return mean[1]
+    parts = [PartFit(*p) for p in blob.parts] or fits()
     return parts_sigma([f.d for f in parts], blob.disparity_sigma, [f.sigma for f in parts])
 
 

@@ -309,9 +309,9 @@ class Verifier:
         return fine
 
     def part_fits(self, frame: StereoFrame, blob: Blob) -> list[PartFit]:
-        """The disparities (px) and 1-σ (px) of the parts of a verified blob (tracker.disparity_sigma.part_fits:
-        the window `match_object` uses first cut into a grid, each part refined from the blob's disparity on
-        the same strips); the parts that do not match are left out."""
+        """The disparities (px), 1-σ (px) and pixel counts of the parts of a verified blob (tracker.
+        disparity_sigma.part_fits: the window `match_object` uses first cut into a grid, each part refined
+        from the blob's disparity on the same strips); the parts that do not match are left out."""
         strips = self._strips(frame, blob.box, blob.mask, blob.disparity, first_window(blob.mask))
         if strips is None:
             return []
