@@ -12,7 +12,7 @@ FROM python:3.11-slim-bookworm
 RUN apt-get update && apt-get install -y --no-install-recommends libgl1 libglib2.0-0 \
     && rm -rf /var/lib/apt/lists/*
 WORKDIR /src
-COPY pyproject.toml setup.py README.md alembic.ini ./
+COPY pyproject.toml setup.py README.md alembic.ini constraints.txt ./
 COPY tracker tracker
 COPY calibration calibration
 COPY tmeye tmeye
@@ -20,7 +20,7 @@ COPY server server
 COPY alembic alembic
 COPY --from=web /web/dist web/dist
 # A regular (not editable) install: the wheel carries the console (server/web_dist) and the migrations.
-RUN pip install --no-cache-dir . && rm -rf /src \
+RUN pip install --no-cache-dir -c constraints.txt . && rm -rf /src \
     && useradd --system --home-dir /data --shell /usr/sbin/nologin --groups video,dialout tmeye \
     && mkdir -p /data && chown tmeye:tmeye /data
 WORKDIR /data

@@ -45,4 +45,5 @@ def test_dockerfile_is_debian_non_root_with_volume_and_health_check() -> None:
     assert 'VOLUME ["/data"]' in lines and any("TMEYE_DATA_DIR=/data" in ln for ln in lines)
     health = " ".join(lines[lines.index(next(ln for ln in lines if ln.startswith("HEALTHCHECK"))):][:2])
     assert "/api/health" in health and "'ok'" in health
-    assert any(ln.startswith("RUN pip install --no-cache-dir . ") for ln in lines)  # a wheel install, not -e
+    # a wheel install, not -e, of the versions CI passed with
+    assert any(ln.startswith("RUN pip install --no-cache-dir -c constraints.txt . ") for ln in lines)

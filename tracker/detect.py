@@ -323,7 +323,7 @@ class StereoSubtractor:
         self._checked(frame)
         pm, s = self.maps(frame.gimbal), 2 * self.cfg.stride
         key = frame.left[::s, ::s]
-        ref = cv2.remap(frame.right, pm.half_fixed, None, cv2.INTER_NEAREST)  # type: ignore[call-overload]
+        ref = cv2.remap(frame.right, pm.half_fixed, None, cv2.INTER_NEAREST)  # type: ignore[call-overload, unused-ignore]
         valid = pm.valid_u8
         if self._objects_low is not None:  # not on the last frame's objects, nor 8 px about them
             valid = np.asarray(cv2.bitwise_and(valid, cv2.bitwise_not(cv2.dilate(self._objects_low, _NEAR_OBJECTS))),
@@ -341,7 +341,7 @@ class StereoSubtractor:
         self.moving = moving
         s = self.cfg.stride
         key = frame.left[::s, ::s] if s > 1 else frame.left
-        ref = cv2.remap(frame.right, pm.low_fixed, None, cv2.INTER_NEAREST)  # type: ignore[call-overload]
+        ref = cv2.remap(frame.right, pm.low_fixed, None, cv2.INTER_NEAREST)  # type: ignore[call-overload, unused-ignore]
         resid = np.asarray(cv2.absdiff(key, ref), np.uint8)  # |Γ(x, y) - Θ(x', y')|, eq. (9)
         excess = cv2.subtract(resid, self.floor)
         fg = np.asarray(cv2.threshold(excess, self.cfg.epsilon, 255, cv2.THRESH_BINARY)[1], np.uint8)

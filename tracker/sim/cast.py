@@ -87,7 +87,7 @@ def cast_plane_fast(view: View, R_wr: F64, s: Surface, img: F32 | U8, depth: F32
     lo = np.array([tw / 2.0 - hw - _MARGIN, th / 2.0 - hh - _MARGIN], np.float32)
     hi = np.array([tw / 2.0 + hw + _MARGIN, th / 2.0 + hh + _MARGIN], np.float32)
     mxy = np.clip(np.asarray(mxy, np.float32), lo, hi)
-    val = cv2.remap(s._tex32, mxy, None, cv2.INTER_LINEAR,  # type: ignore[call-overload]
+    val = cv2.remap(s._tex32, mxy, None, cv2.INTER_LINEAR,  # type: ignore[call-overload, unused-ignore]
                     borderMode=cv2.BORDER_REFLECT101)
     den = n_c[0] * xy[..., 0] + n_c[1] * xy[..., 1] + np.float32(n_c[2])
     with np.errstate(divide="ignore"):
