@@ -112,7 +112,6 @@ def test_too_few_parts_stand_for_twice_the_matchers_sigma_and_the_phase_term_is_
     assert abs(loc.sigma_r - expected) < 0.05 * expected
 
 
-
 def _two_depths(contrast_right: float) -> tuple[np.ndarray, np.ndarray]:
     """A surface whose left half (columns under 80 of the left image) lies at a disparity of 10 px and right
     half at 10.6 px (a walker's arm before its torso), the right half's texture `contrast_right` times as

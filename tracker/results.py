@@ -21,9 +21,10 @@ class Blob:
     """A verified object in one frame. box: raw-left pixels (x0, y0, x1, y1); mask: bool (y1-y0, x1-x0);
     centroid_raw: eq. (10) in raw left pixels; centroid_rect: the same pixels' centroid in rectified
     coordinates; disparity, disparity_sigma, bg_disparity in px (rectified); one_camera: seen by the left
-    camera alone, its disparity the one a track holds (tracker.one_camera); parts: a person's, the parts of
-    its whole outline (d px, own 1-σ px, pixel count each; tracker.disparity_sigma.on_surface), whose mean
-    its disparity is where at least MIN_PARTS matched, else empty. disparity_sigma stays the matcher's own
+    camera alone, its disparity the one a track holds (tracker.one_camera); parts: for a person seen by both
+    cameras, the parts of its whole outline that matched (d px, own 1-σ px, pixel count each; tracker.
+    disparity_sigma.on_surface), its disparity their mean where at least MIN_PARTS did; for any other blob
+    empty. disparity_sigma stays the matcher's own
     1-σ of its one fit (the tracker's measurement noise); the 1-σ a location is given also counts the
     parts' scatter (tracker.disparity_sigma.blob_sigma)."""
 
