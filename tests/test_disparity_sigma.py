@@ -9,7 +9,6 @@ from tracker.disparity_sigma import (
     FEW_PARTS_FACTOR,
     MIN_PARTS,
     ROWS,
-    PartFit,
     blob_sigma,
     on_surface,
     part_fits,
@@ -17,7 +16,7 @@ from tracker.disparity_sigma import (
     scatter_sigma,
     surface_mean,
 )
-from tracker.results import Blob
+from tracker.results import Blob, PartFit
 from tracker.stereo import refine_region
 
 

@@ -32,12 +32,11 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import replace
-from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
-from tracker.results import Blob
+from tracker.results import Blob, PartFit
 from tracker.stereo import refine_gram
 from tracker.strips import whole_outline
 
@@ -45,14 +44,6 @@ U8 = NDArray[np.uint8]
 COLUMNS, ROWS = 4, 2
 MIN_PARTS = 5
 FEW_PARTS_FACTOR = 2.0
-
-
-class PartFit(NamedTuple):
-    """One part's match (part_fits): its disparity d (px), its own fit's 1-σ (px) and its pixel count."""
-
-    d: float
-    sigma: float
-    pixels: int
 
 
 def scatter_sigma(disparities: list[float], sigmas: list[float] | None = None) -> float:
@@ -119,10 +110,10 @@ def blob_sigma(blob: Blob, fits: Callable[[], list[PartFit]]) -> float:
     if blob.one_camera:
         return blob.disparity_sigma
     if blob.parts:
-        mean = surface_mean([PartFit(*p) for p in blob.parts])
+        mean = surface_mean(list(blob.parts))
         if mean is not None:
             return mean[1]
-    parts = [PartFit(*p) for p in blob.parts] or fits()
+    parts = list(blob.parts) or fits()
     return parts_sigma([f.d for f in parts], blob.disparity_sigma, [f.sigma for f in parts])
 
 

@@ -5,6 +5,7 @@ be handed to other threads and published to many subscribers."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -16,16 +17,24 @@ F64 = NDArray[np.float64]
 BoolA = NDArray[np.bool_]
 
 
+class PartFit(NamedTuple):
+    """One part's match (tracker.disparity_sigma.part_fits): its disparity d (px), its own fit's 1-σ (px)
+    and its pixel count."""
+
+    d: float
+    sigma: float
+    pixels: int
+
+
 @dataclass(frozen=True)
 class Blob:
     """A verified object in one frame. box: raw-left pixels (x0, y0, x1, y1); mask: bool (y1-y0, x1-x0);
     centroid_raw: eq. (10) in raw left pixels; centroid_rect: the same pixels' centroid in rectified
     coordinates; disparity, disparity_sigma, bg_disparity in px (rectified); one_camera: seen by the left
     camera alone, its disparity the one a track holds (tracker.one_camera); parts: for a person seen by both
-    cameras, the parts of its whole outline that matched (d px, own 1-σ px, pixel count each; tracker.
-    disparity_sigma.on_surface), its disparity their mean where at least MIN_PARTS did; for any other blob
-    empty. disparity_sigma stays the matcher's own
-    1-σ of its one fit (the tracker's measurement noise); the 1-σ a location is given also counts the
+    cameras, the parts of its whole outline that matched (PartFit each; tracker.disparity_sigma.on_surface),
+    its disparity their mean where at least MIN_PARTS did; for any other blob empty. disparity_sigma stays
+    the matcher's own 1-σ of its one fit (the tracker's measurement noise); the 1-σ a location is given also counts the
     parts' scatter (tracker.disparity_sigma.blob_sigma)."""
 
     box: Box
@@ -39,7 +48,7 @@ class Blob:
     score: float
     gain: float = 1.0
     one_camera: bool = False
-    parts: tuple[tuple[float, float, int], ...] = ()
+    parts: tuple[PartFit, ...] = ()
 
 
 @dataclass(frozen=True)

@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 
 from tracker.bgdepth import CorrespondenceMap
 from tracker.detect import Box, StereoSubtractor
-from tracker.disparity_sigma import PartFit, part_fits
+from tracker.disparity_sigma import part_fits
 from tracker.frames import StereoFrame
 from tracker.growth import grow_tracked
 from tracker.masks import (
@@ -43,7 +43,7 @@ from tracker.regions import (
     nearest_hint,
     row_thirds,
 )
-from tracker.results import Blob
+from tracker.results import Blob, PartFit
 from tracker.rim import DEFAULT_RIM, RimConfig, RimRecovery
 from tracker.split import join, own_pixels, same_body
 from tracker.stereo import RegionMatch
