@@ -19,10 +19,18 @@ from server.db.models import Alarm
 from server.services.evidence import alarm_range
 from server.services.tracks import MIN_DETECTIONS
 
+# The live tracker's time budgets (verify_budget_ms, sigma_budget_ms) put boxes off by the wall clock, so its
+# result depends on the machine's load; a replay (unpaced) has none. A target entering the view was seen a
+# frame later live than replayed in one of two runs here. A CI run, slower, gave same_detected 0.77 over 151
+# frames with the objects' counts equal in all but one (0.99): the likely cause is such a frame starting the
+# entering target a second track while the first one, the primary, coasted "not detected" for up to max_missed
+# frames. Without the budgets a replay with unchanged settings must reproduce the live result.
+NO_BUDGETS = {"TMEYE_VERIFY_BUDGET_MS": "0", "TMEYE_SIGMA_BUDGET_MS": "0"}
+
 
 @pytest.fixture(scope="module")
 def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
-    s = start_server(tmp_path_factory.mktemp("replay") / "data", env={"TMEYE_SEGMENT_S": "3"})
+    s = start_server(tmp_path_factory.mktemp("replay") / "data", env={"TMEYE_SEGMENT_S": "3", **NO_BUDGETS})
     yield s
     s.stop()
 
@@ -64,11 +72,13 @@ def test_replay_tracks_are_stored_apart(server: Server) -> None:
         assert r.status_code == 202, r.text
         job = wait_done(c, r.json()["id"])
         assert job["status"] == "done", job
+        assert c.get("/api/status").json()["deferred_boxes"] == 0  # the live run had no budget (NO_BUDGETS)
         assert job["settings"]["threshold"] == 12 and job["settings"]["rig"] == "live"
         live_tm = c.get("/api/telemetry", params={"start": start, "end": end}).json()
         assert job["frames"] == job["agreement"]["frames"] > 0.9 * len(live_tm)
-        assert job["agreement"]["same_detected"] > 0.9, job["agreement"]  # unchanged settings: nearly the live result
         replayed = c.get("/api/tracks", params={"replay": job["id"]}).json()
+        seen = "".join("1" if tm["detected"] else "0" for tm in live_tm)
+        assert job["agreement"]["same_detected"] > 0.9, (job["agreement"], seen, replayed)  # nearly the live result
         live = c.get("/api/tracks").json()
         assert all(t["replay_id"] == job["id"] and t["run_id"].startswith("replay-") for t in replayed)
         assert all(t["replay_id"] is None for t in live)
