@@ -1,5 +1,6 @@
 """Identities across frames (tracker.tracks.MultiTracker): the primary target is the oldest confirmed track;
-an operator's choice of another, and its undo when the choice cannot be recorded."""
+an operator's choice of another, and its undo when the choice cannot be recorded; a track begun beside the
+primary is taken over by it when the primary misses a frame."""
 
 from __future__ import annotations
 
@@ -42,3 +43,36 @@ def test_an_undone_choice_restores_the_primary_and_the_confirmation() -> None:
     mt2.tracks = [tr for tr in mt2.tracks if tr.track_id != 1]
     mt2.restore_primary(before2)
     assert mt2.primary_id == 2
+
+
+def _primary_at(y: float) -> MultiTracker:
+    mt = MultiTracker()
+    for k in range(3):
+        mt.update(k / 30, np.array([[324.0, y, 8.6]]))
+    assert mt.primary_id == 1
+    return mt
+
+
+def test_a_part_split_off_the_primary_goes_on_as_the_primary() -> None:
+    """Live on the endless scene: a fading target's outline split in two (its bottom and its top, 24 px
+    apart); the bottom kept the primary's id, the top began a track, then the bottom was gone. Before, the
+    top's track took the sightings and the primary coasted, not detected, for 45 frames."""
+    mt = _primary_at(250.0)
+    both = mt.update(3 / 30, np.array([[324.0, 250.0, 8.6], [324.0, 226.0, 8.6]]))
+    assert both == [1, 2] and mt.get(2) is not None and mt.get(2).born_near == 1  # type: ignore[union-attr]
+    top = mt.update(4 / 30, np.array([[324.0, 226.0, 8.6]]))
+    assert top == [1] and mt.primary_id == 1 and [tr.track_id for tr in mt.tracks] == [1]
+    tr = mt.get(1)
+    assert tr is not None and tr.missed == 0 and tr.hits == 6 and np.allclose(tr.state, [324.0, 226.0, 8.6])
+    assert mt.update(5 / 30, np.array([[324.0, 226.0, 8.6]])) == [1]
+
+
+def test_an_object_begun_apart_never_takes_the_primarys_place() -> None:
+    """Another object, first seen outside the primary's gate, passes where the primary is predicted while the
+    primary is hidden: it keeps its own id and the primary coasts."""
+    mt = _primary_at(250.0)
+    mt.update(3 / 30, np.array([[324.0, 250.0, 8.6], [200.0, 250.0, 8.6]]))
+    assert mt.get(2) is not None and mt.get(2).born_near is None  # type: ignore[union-attr]
+    for k, x in enumerate((240.0, 280.0, 320.0)):
+        assert mt.update((4 + k) / 30, np.array([[x, 250.0, 8.6]])) == [2]
+    assert mt.primary_id == 1 and mt.get(1).missed == 3  # type: ignore[union-attr]

@@ -3,7 +3,9 @@
 Association in the image by predicted centroid (constant velocity in pixels and disparity), solved as
 an assignment problem (scipy's linear_sum_assignment) with a gate. A track is confirmed after
 `confirm_hits` associations and dropped after `max_missed` frames without one. The primary target is the
-oldest confirmed track, kept until it is dropped (no switching to a newcomer).
+oldest confirmed track, kept until it is dropped (no switching to a newcomer). A confirmed track that misses a
+frame while a younger track begun within its gate is seen within it takes that track over (`_reunite`): a
+part split off its object, or the object seen again beside its prediction, keeps the older identity.
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ class Track:
     confirmed: bool = False
     since_stereo: int = 0  # updates since its last stereo sighting: sightings by the left camera alone, misses
     stereo: list[tuple[float, float, float]] = field(default_factory=list)  # the last stereo sightings' t, d, σ_d
+    born_near: int | None = None  # the confirmed track whose gate its first sighting lay in (MultiTracker._reunite)
 
     def predict(self, t: float) -> F64:
         return np.asarray(self.state + self.velocity * (t - self.t))
@@ -98,12 +101,47 @@ class MultiTracker:
             if assigned[oi] == -1:
                 seen = [] if alone[oi] else [(t, float(obs[oi, 2]), float(sd[oi]))]
                 tr = Track(self._next_id, obs[oi].astype(float), t=t, since_stereo=0 if seen else NO_STEREO,
-                           confirmed=self.cfg.confirm_hits <= 1 and bool(seen), stereo=seen)
+                           confirmed=self.cfg.confirm_hits <= 1 and bool(seen), stereo=seen,
+                           born_near=self._gated_by(t, obs[oi]))
                 self._next_id += 1
                 self.tracks.append(tr)
                 assigned[oi] = tr.track_id
+        self._reunite(t, assigned)
         self._choose_primary()
         return assigned
+
+    def _cost(self, tr: Track, t: float, x: F64) -> float:
+        """The association's cost of state x (x, y, d) for track tr at time t (as `_associate`)."""
+        p = tr.predict(t)
+        return float(np.hypot(p[0] - x[0], p[1] - x[1]) + 2.0 * abs(p[2] - x[2]))
+
+    def _gate(self, tr: Track) -> float:
+        return self.cfg.gate_px + self.cfg.gate_growth_px * tr.missed
+
+    def _gated_by(self, t: float, x: F64) -> int | None:
+        """The oldest confirmed track (other than one just begun) within whose gate state x lies."""
+        return next((tr.track_id for tr in self.tracks if tr.confirmed and self._cost(tr, t, x) <= self._gate(tr)),
+                    None)
+
+    def _reunite(self, t: float, assigned: list[int]) -> None:
+        """A confirmed track that missed this frame takes over a younger track begun within its gate (a part
+        of its object split off and kept while the rest faded, or the object seen again beside where it was
+        predicted), when the younger one's sighting this frame lies within its gate: the older identity, the
+        primary target's, goes on (with the younger one's state) instead of coasting, "not detected", for up
+        to max_missed frames while its object is tracked under another id. Live on the endless scene a part
+        of the primary target split off so and the primary coasted 45 frames (2026-12-02)."""
+        for old in [tr for tr in self.tracks if tr.confirmed and tr.missed > 0]:
+            young = [tr for tr in self.tracks if tr.born_near == old.track_id and tr.missed == 0
+                     and self._cost(old, t, tr.state) <= self._gate(old)]
+            if not young:
+                continue
+            new = min(young, key=lambda tr: self._cost(old, t, tr.state))
+            old.state, old.velocity, old.t, old.missed = new.state, new.velocity, new.t, 0
+            old.hits += new.hits
+            old.since_stereo = new.since_stereo
+            old.stereo = [*old.stereo, *new.stereo][-STEREO_KEPT:]
+            self.tracks.remove(new)
+            assigned[:] = [old.track_id if a == new.track_id else a for a in assigned]
 
     def _associate(self, t: float, obs: F64) -> list[tuple[int, int]]:
         if not self.tracks or len(obs) == 0:
