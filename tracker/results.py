@@ -34,8 +34,8 @@ class Blob:
     camera alone, its disparity the one a track holds (tracker.one_camera); parts: for a person seen by both
     cameras, the parts of its whole outline that matched (PartFit each; tracker.disparity_sigma.on_surface),
     its disparity their mean where at least MIN_PARTS did; for any other blob empty. disparity_sigma stays
-    the matcher's own 1-σ of its one fit (the tracker's measurement noise); the 1-σ a location is given also counts the
-    parts' scatter (tracker.disparity_sigma.blob_sigma)."""
+    the matcher's own 1-σ of its one fit (the tracker's measurement noise); the 1-σ a location is given also
+    counts the parts' scatter (tracker.disparity_sigma.blob_sigma)."""
 
     box: Box
     mask: BoolA

@@ -111,15 +111,17 @@ class MultiTracker:
         return assigned
 
     def _cost(self, tr: Track, t: float, x: F64) -> float:
-        """The association's cost of state x (x, y, d) for track tr at time t (as `_associate`)."""
-        p = tr.predict(t)
-        return float(np.hypot(p[0] - x[0], p[1] - x[1]) + 2.0 * abs(p[2] - x[2]))
+        """The association's cost (`_costs`) of state x (x, y, d) for track tr at time t."""
+        return float(_costs(tr.predict(t)[None, :], np.asarray(x, np.float64)[None, :])[0, 0])
 
     def _gate(self, tr: Track) -> float:
+        """The largest cost at which tr takes a sighting: it widens while the track coasts, its predicted
+        position growing less certain."""
         return self.cfg.gate_px + self.cfg.gate_growth_px * tr.missed
 
     def _gated_by(self, t: float, x: F64) -> int | None:
-        """The oldest confirmed track (other than one just begun) within whose gate state x lies."""
+        """The oldest confirmed track within whose gate state x lies (a track seen this frame at its sighting;
+        with confirm_hits 1 that may be one begun this frame)."""
         return next((tr.track_id for tr in self.tracks if tr.confirmed and self._cost(tr, t, x) <= self._gate(tr)),
                     None)
 
@@ -146,12 +148,9 @@ class MultiTracker:
     def _associate(self, t: float, obs: F64) -> list[tuple[int, int]]:
         if not self.tracks or len(obs) == 0:
             return []
-        pred = np.array([tr.predict(t) for tr in self.tracks])
-        cost = np.linalg.norm(pred[:, None, :2] - obs[None, :, :2], axis=2)
-        cost += 2.0 * np.abs(pred[:, None, 2] - obs[None, :, 2])  # disparity keeps depth order apart
+        cost = _costs(np.array([tr.predict(t) for tr in self.tracks]), obs)
         rows, cols = linear_sum_assignment(cost)
-        # the gate widens while a track coasts: its predicted position grows less certain
-        gate = [self.cfg.gate_px + self.cfg.gate_growth_px * tr.missed for tr in self.tracks]
+        gate = [self._gate(tr) for tr in self.tracks]
         return [(int(r), int(c)) for r, c in zip(rows, cols, strict=True) if cost[r, c] <= gate[r]]
 
     def select_primary(self, track_id: int) -> PrimaryBefore | None:
@@ -207,6 +206,14 @@ class MultiTracker:
 
     def get(self, track_id: int) -> Track | None:
         return next((tr for tr in self.tracks if tr.track_id == track_id), None)
+
+
+def _costs(pred: F64, obs: F64) -> F64:
+    """The association's cost of each observation for each track, (N, M): the image distance (px) from the
+    track's predicted (x, y) plus twice the disparities' difference (px), which keeps depth order apart.
+    pred: (N, 3) predicted x, y, d; obs: (M, 3)."""
+    cost = np.linalg.norm(pred[:, None, :2] - obs[None, :, :2], axis=2)
+    return np.asarray(cost + 2.0 * np.abs(pred[:, None, 2] - obs[None, :, 2]), np.float64)
 
 
 def _held(stereo: list[tuple[float, float, float]]) -> tuple[float, float, float]:
