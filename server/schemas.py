@@ -331,7 +331,8 @@ class AimSettings(Strict):
     deadband_frac: float = Field(0.02, ge=0, le=0.5, title="Dead band (fraction of width)",
                                  description="deadband as a fraction of the frame width")
     loss_timeout_s: float = Field(1.5, ge=0, le=600, title="Home after a loss (s)",
-                                  description="home after the target is lost this long")
+                                  description="a target unseen this long is given up: the mount follows another "
+                                              "target in view, or returns home")
     home_pan_deg: float = Field(0.0, ge=-170, le=170, title="Home pan (°)",
                                 description="where the mount waits with no target")
     home_tilt_deg: float = Field(0.0, ge=-30, le=80, title="Home tilt (°)",

@@ -94,3 +94,22 @@ def test_a_failing_driver_is_reported_and_not_hammered() -> None:
     faulted = [s for s in steps if s.fault is not None]
     assert faulted and all(s.servo_json()["fault"] == drv.fault for s in faulted)
     assert all(s.result.primary is not None for s in steps[2:])  # the tracker keeps tracking
+
+
+def test_a_new_primary_target_is_followed_afresh() -> None:
+    """When the primary target changes (the tracker handing the role on, or an operator's choice), the
+    predictor starts again from the new target's first measurement instead of taking it as the old one's
+    next (an initialisation: no innovation)."""
+    scenario = get_scenario("manoeuvre")
+    sim = SimRig(scenario, seed=0)
+    pipe = closed_loop_pipeline(sim, scenario)
+    loop = ServoLoop(pipe, AimController(AimConfig(focal_px=pipe.rect.f)), closed_loop_imm(), None)
+    steps = [loop.step(sim.step(GimbalState()).frame) for _ in range(8)]
+    assert steps[-1].result.primary_id == 1 and steps[-1].estimate is not None
+    assert steps[-1].estimate.nis is not None  # updating track 1
+    pipe.tracker.tracks.clear()  # the same object now begins track 2
+    steps = [loop.step(sim.step(GimbalState()).frame) for _ in range(3)]
+    assert [s.result.primary_id for s in steps] == [None, 2, 2]
+    est = [s.estimate for s in steps]
+    assert est[1] is not None and est[1].state is not None and est[1].nis is None  # begun again
+    assert est[2] is not None and est[2].nis is not None

@@ -1,12 +1,13 @@
 """Identities across frames (tracker.tracks.MultiTracker): the primary target is the oldest confirmed track;
 an operator's choice of another, and its undo when the choice cannot be recorded; a track begun beside the
-primary is taken over by it when the primary misses a frame."""
+primary is taken over by it when the primary misses a frame; a primary unseen past its hold yields to a
+target in view."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from tracker.tracks import MultiTracker, PrimaryBefore
+from tracker.tracks import MultiTracker, PrimaryBefore, TrackerConfig
 
 
 def _two_tracks() -> MultiTracker:
@@ -76,3 +77,44 @@ def test_an_object_begun_apart_never_takes_the_primarys_place() -> None:
     for k, x in enumerate((240.0, 280.0, 320.0)):
         assert mt.update((4 + k) / 30, np.array([[x, 250.0, 8.6]])) == [2]
     assert mt.primary_id == 1 and mt.get(1).missed == 3  # type: ignore[union-attr]
+
+
+def _primary_gone_other_seen(hold_s: float | None, seconds: float) -> MultiTracker:
+    """The primary (track 1, seen 0.1 s) leaves the view; another object, far from it, is seen for SECONDS
+    (confirmed after 2 sightings) at 30 frames a second."""
+    mt = MultiTracker(TrackerConfig(primary_hold_s=hold_s))
+    for k in range(3):
+        mt.update(k / 30, np.array([[324.0, 250.0, 8.6]]))
+    frames = round(seconds * 30)
+    for k in range(frames):
+        assert mt.update((3 + k) / 30, np.array([[50.0, 300.0, 12.0]])) == [2]
+    return mt
+
+
+def test_a_primary_unseen_past_the_hold_yields_to_a_target_in_view() -> None:
+    """Live: the primary left the view, the aim gave it up after its loss timeout (1.5 s) and sent the mount
+    home, while a newly confirmed target was seen; the primary kept the role, coasting "not detected",
+    until max_missed (60 frames). Now the oldest seen confirmed track takes it once the primary has gone
+    unseen primary_hold_s."""
+    mt = _primary_gone_other_seen(1.5, 1.5)  # unseen since 2/30 s, now 47/30 s: 1.5 s exactly, held
+    assert mt.primary_id == 1 and mt.get(1) is not None and mt.get(1).missed == 45  # type: ignore[union-attr]
+    mt.update(48 / 30, np.array([[50.0, 300.0, 12.0]]))
+    assert mt.primary_id == 2 and mt.get(1) is not None  # the old one lives on (coasting), not primary
+    # it is seen again: it stays a track of its own; the role does not come back
+    assert mt.update(49 / 30, np.array([[50.0, 300.0, 12.0], [324.0, 250.0, 8.6]])) == [2, 1]
+    assert mt.primary_id == 2
+
+
+def test_a_coasting_primary_keeps_the_role_when_no_other_target_is_seen_or_no_hold_is_set() -> None:
+    mt = MultiTracker(TrackerConfig(primary_hold_s=1.5))
+    for k in range(3):
+        mt.update(k / 30, np.array([[324.0, 250.0, 8.6]]))
+    for k in range(55):  # 1.8 s unseen, nothing else in view
+        mt.update((3 + k) / 30, np.zeros((0, 3)))
+    assert mt.primary_id == 1
+    mt.update(58 / 30, np.array([[50.0, 300.0, 12.0]]))  # seen once: not confirmed, no primary
+    assert mt.primary_id == 1
+    kept = _primary_gone_other_seen(None, 1.9)  # never yields: until dropped (max_missed 60 frames)
+    assert kept.primary_id == 1
+    dropped = _primary_gone_other_seen(None, 2.1)
+    assert dropped.get(1) is None and dropped.primary_id == 2

@@ -130,6 +130,7 @@ class ServoLoop:
         self.focal_px = pipe.rect.f
         self._latencies: deque[float] = deque(maxlen=self.config.latency_window)
         self._last_attempt = -math.inf
+        self._following: int | None = None  # the primary target's track id the predictor follows
 
     def latency_s(self) -> float:
         """The capture-to-command latency model (s): configured, or the median of recent measurements."""
@@ -149,6 +150,10 @@ class ServoLoop:
         res = self.pipe.step(frame)
         t_pipe = time.perf_counter()
         det = res.primary
+        if res.primary_id is not None and res.primary_id != self._following:
+            self._following = res.primary_id  # a new target (the tracker's or an operator's choice): the old
+            if self.predictor is not None:  # one's motion says nothing of it
+                self.predictor.reset()
         rect = self.pipe.rect
         z = None if det is None else measurement_of(det, rect.f, rect.b, self.config)
         est = pred = None

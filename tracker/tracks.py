@@ -3,7 +3,9 @@
 Association in the image by predicted centroid (constant velocity in pixels and disparity), solved as
 an assignment problem (scipy's linear_sum_assignment) with a gate. A track is confirmed after
 `confirm_hits` associations and dropped after `max_missed` frames without one. The primary target is the
-oldest confirmed track, kept until it is dropped (no switching to a newcomer). A confirmed track that misses a
+oldest confirmed track, kept while it is seen or coasts (no switching to a newcomer), until it is dropped or has
+gone unseen for `primary_hold_s` while another confirmed track is seen: then the oldest seen one takes the role
+(a mount's aim gives a lost target up after the same time, tracker.aim). A confirmed track that misses a
 frame while a younger track begun within its gate is seen within it takes that track over (`_reunite`): a
 part split off its object, or the object seen again beside its prediction, keeps the older identity.
 """
@@ -55,6 +57,7 @@ class TrackerConfig:
     gate_growth_px: float = 4.0  # per frame without a detection
     confirm_hits: int = 2
     max_missed: int = 60
+    primary_hold_s: float | None = 1.5  # a primary unseen this long yields to a seen confirmed track (None: never)
 
 
 class MultiTracker:
@@ -107,7 +110,7 @@ class MultiTracker:
                 self.tracks.append(tr)
                 assigned[oi] = tr.track_id
         self._reunite(t, assigned)
-        self._choose_primary()
+        self._choose_primary(t)
         return assigned
 
     def _cost(self, tr: Track, t: float, x: F64) -> float:
@@ -173,11 +176,19 @@ class MultiTracker:
         self.primary_id = before.primary_id
         self._choose_primary()
 
-    def _choose_primary(self) -> None:
+    def _choose_primary(self, t: float | None = None) -> None:
+        """Keep the primary target while it lives and is seen, or coasts for no longer than primary_hold_s (at
+        time t; None: however long) or with no other confirmed track seen; else the oldest confirmed track
+        seen this frame, or failing one the oldest confirmed track. Live, a primary that left the view
+        had kept the role while a newly confirmed target was seen: 15 frames "not detected", after the aim
+        had given it up and sent the mount home (2026-12-02)."""
         alive = {tr.track_id: tr for tr in self.tracks if tr.confirmed}
-        if self.primary_id in alive:
+        seen = [i for i, tr in alive.items() if tr.missed == 0]
+        cur = alive.get(self.primary_id) if self.primary_id is not None else None
+        hold = self.cfg.primary_hold_s
+        if cur is not None and (cur.missed == 0 or not seen or hold is None or t is None or t - cur.t <= hold):
             return
-        self.primary_id = min(alive) if alive else None
+        self.primary_id = min(seen or alive) if alive else None
 
     def predictions(self, t: float) -> F64:
         """Predicted (x, y, disparity) at time t of the tracks seen in the last few frames, (N, 3)."""

@@ -77,7 +77,8 @@ def compose(cfg: RuntimeConfig, tuning: TrackerTuning | None = None, rig: Stereo
 
 def pipeline(rig: StereoRig, cfg: RuntimeConfig, tuning: TrackerTuning, fps: float) -> Pipeline:
     with rig_errors(cfg):
-        return Pipeline(rig, replace(tuning.detector, fps=fps), tuning.tracks, origin=np.array(cfg.origin, float),
+        return Pipeline(rig, replace(tuning.detector, fps=fps), tuning.track_config(),
+                        origin=np.array(cfg.origin, float),
                         verify_budget_ms=cfg.verify_budget_ms if cfg.realtime else None,
                         sigma_budget_ms=cfg.sigma_budget_ms if cfg.realtime else None, solid=solid_prior(cfg),
                         between_frames=cfg.realtime)  # the worker's time between frames (Runtime._between_frames)
@@ -249,7 +250,7 @@ def apply_tuning(comp: Composition, tuning: TrackerTuning) -> None:
     pipe = comp.pipeline
     det = replace(tuning.detector, fps=pipe.subtractor.cfg.fps, stride=pipe.subtractor.cfg.stride)
     pipe.subtractor.reconfigure(det)
-    pipe.tracker.cfg = tuning.tracks
+    pipe.tracker.cfg = tuning.track_config()
     if comp.controller is not None:
         old = comp.controller.config
         comp.controller.config = replace(tuning.aim, frame_width_px=old.frame_width_px, focal_px=old.focal_px,

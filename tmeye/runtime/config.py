@@ -84,6 +84,11 @@ class TrackerTuning:
     tracks: TrackerConfig = field(default_factory=TrackerConfig)
     aim: AimConfig = field(default_factory=AimConfig)
 
+    def track_config(self) -> TrackerConfig:
+        """The identities' settings, the primary target given up after the aim's loss timeout: a target
+        unseen that long passes the role to one in view, which the mount then follows instead of going home."""
+        return replace(self.tracks, primary_hold_s=self.aim.loss_timeout_s)
+
     def as_dict(self) -> dict[str, dict[str, Any]]:
         return {"detector": {k: getattr(self.detector, k) for k in DETECTOR_FIELDS},
                 "tracks": {k: getattr(self.tracks, k) for k in TRACKS_FIELDS},

@@ -364,25 +364,16 @@ class Runtime:
         what `restore_primary` undoes the choice with."""
         def apply() -> PrimaryBefore | None:
             assert self.comp is not None
-            before = self.comp.pipeline.tracker.select_primary(track_id)
-            if before is not None:
-                self._reset_predictor()  # a new target: the old one's motion says nothing
-            return before
+            return self.comp.pipeline.tracker.select_primary(track_id)  # the loop's predictor starts afresh
         return self.submit(apply)
 
     def restore_primary(self, before: PrimaryBefore) -> Future[None]:
         """Undo `select_primary` (its audit record was refused): the primary target from before, followed
-        afresh (the predictor was reset by the choice)."""
+        afresh (tracker.closedloop.ServoLoop resets its predictor when the primary target changes)."""
         def apply() -> None:
             assert self.comp is not None
             self.comp.pipeline.tracker.restore_primary(before)
-            self._reset_predictor()
         return self.submit(apply)
-
-    def _reset_predictor(self) -> None:
-        assert self.comp is not None
-        if self.comp.loop is not None and self.comp.loop.predictor is not None:
-            self.comp.loop.predictor.reset()
 
     def _point(self, camera: str, u: float, v: float) -> tuple[float, float, ServoWish]:
         servo = self._need_servo()

@@ -901,7 +901,7 @@ export interface components {
             deadband_frac: number;
             /**
              * Home after a loss (s)
-             * @description home after the target is lost this long
+             * @description a target unseen this long is given up: the mount follows another target in view, or returns home
              * @default 1.5
              */
             loss_timeout_s: number;
