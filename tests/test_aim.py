@@ -95,6 +95,25 @@ def test_holds_then_returns_home_after_the_loss_timeout() -> None:
     assert ctrl.setpoint == GimbalState(5.0, 10.0)  # ... then went home
 
 
+def test_the_loss_timeout_counts_from_the_last_measurement_not_from_the_predictions_end() -> None:
+    """Live, a predictor coasts 1 s after its target's last measurement, and the mount went home 1.5 s
+    after that, 2.5 s after the target was last seen, against a loss timeout of 1.5 s."""
+    cfg = AimConfig(loss_timeout_s=1.5, home_pan_deg=5.0, home_tilt_deg=10.0)
+    ctrl = AimController(cfg)
+    target = state_at([5.0, 0.0, 5.0])
+    run(ctrl, [AimInput(k * DT, predicted=target) for k in range(60)])  # measured until t ≈ 2 s
+    coast = [AimInput(2.0 + k * DT, predicted=target, coasting_s=k * DT) for k in range(1, 30)]  # to 2.97 s
+    assert all(c is None for c in run(ctrl, coast))  # following the prediction
+    lost = run(ctrl, [AimInput(3.0 + k * DT) for k in range(0, 60)])  # the prediction has run out
+    t_first = min(c.t for c in lost if c is not None)
+    assert 3.5 < t_first < 3.5 + 2 * DT  # 1.5 s after the last measurement at about 2 s
+    assert all(c.reason == "home" for c in lost if c is not None)
+    ctrl2 = AimController(cfg)  # a prediction that outlasts the timeout: home all the same
+    run(ctrl2, [AimInput(k * DT, predicted=target) for k in range(60)])
+    long = run(ctrl2, [AimInput(2.0 + k * DT, predicted=target, coasting_s=k * DT) for k in range(1, 90)])
+    assert min(c.t for c in long if c is not None) > 3.5 and ctrl2.setpoint == GimbalState(5.0, 10.0)
+
+
 def test_manual_mode_overrides_until_resumed() -> None:
     ctrl = AimController()
     target = state_at([-3.0, 0.0, 5.0])

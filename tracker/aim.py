@@ -9,7 +9,8 @@ Shared behaviour (`AimConfig`):
 - deadband: while the setpoint is at rest and the aim error (goal minus setpoint, pan scaled by
   cos tilt) is below `deadband_frac` of the frame width (as an angle: atan(frac W / f)), no command is
   issued; once it moves it goes on until the goal is reached (hysteresis), sparing the motors;
-- after `loss_timeout_s` without a target the mount returns home;
+- `loss_timeout_s` after the target was last measured the mount returns home (until then it follows the
+  prediction while there is one, then holds);
 - manual mode: `set_manual(pan, tilt)` overrides everything (still rate-limited) until `resume_auto()`.
 `step()` returns None when there is nothing new to send.
 """
@@ -74,6 +75,8 @@ class AimInput:
     `Predictor.predict_at`. current: its estimate at capture time (used with the centroid to measure
     the pointing bias). centroid_px: the target centroid's offset (du, dv) in pixels from the principal
     point, u right, v down, averaged over the left and right images (the mean cancels the ±b/2 parallax).
+    coasting_s: how long (s) the predicted target has gone unmeasured (`Predictor.coasting_s`): the loss
+    timeout counts from its last measurement, not from when the prediction runs out.
     """
 
     t: float
@@ -81,6 +84,7 @@ class AimInput:
     predicted: PredictedState | None = None
     current: PredictedState | None = None
     centroid_px: tuple[float, float] | None = None
+    coasting_s: float = 0.0
 
 
 class AimMode(StrEnum):
@@ -198,12 +202,13 @@ class _AimBase:
         if self._manual is not None:
             return self._manual, "manual"
         goal, reason = self._auto_goal(inp, dt)
-        if goal is not None:
-            self._last_seen = inp.t
-            return (cfg.pan_limits.clamp(goal[0]), cfg.tilt_limits.clamp(goal[1])), reason
         assert self._last_seen is not None
+        if goal is not None:  # a target: seen, or predicted since it was last measured
+            self._last_seen = max(self._last_seen, inp.t - inp.coasting_s)
         if inp.t - self._last_seen > cfg.loss_timeout_s:
             return (cfg.home_pan_deg, cfg.home_tilt_deg), "home"
+        if goal is not None:
+            return (cfg.pan_limits.clamp(goal[0]), cfg.tilt_limits.clamp(goal[1])), reason
         return None, ""  # hold: keep the previous goal
 
     def _auto_goal(self, inp: AimInput, dt: float) -> tuple[tuple[float, float] | None, str]:

@@ -164,7 +164,7 @@ class ServoLoop:
                 pred = self.predictor.predict_at(frame.t + horizon)
         centroid = None if det is None else centroid_offset(det, self.focal_px)
         cmd = self.controller.step(AimInput(frame.t, frame.gimbal, pred, None if est is None else est.state,
-                                            centroid))
+                                            centroid, 0.0 if est is None else est.coasting_s))
         cmd = self._send(frame, cmd)
         if cmd is None:
             self._keepalive()
