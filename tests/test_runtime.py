@@ -199,10 +199,16 @@ def test_tuning_applies_from_the_next_frame_and_rejects_bad_fields() -> None:
     rt = Runtime(RuntimeConfig(scenario="walk", servo=None, realtime=True))
     rt.start()
     try:
-        new = rt.tuning.updated({"detector": {"epsilon": 20}, "tracks": {"gate_px": 30.0}})
+        assert TrackerTuning().track_config().primary_hold_s == TrackerTuning().aim.loss_timeout_s == 1.5
+        new = rt.tuning.updated({"detector": {"epsilon": 20}, "tracks": {"gate_px": 30.0},
+                                 "aim": {"loss_timeout_s": 4.0}})
         rt.set_tuning(new).result(2)
         assert rt.comp is not None
         assert rt.comp.pipeline.subtractor.cfg.epsilon == 20 and rt.comp.pipeline.tracker.cfg.gate_px == 30.0
+        # the primary target is given up when the aim gives it up
+        assert rt.comp.pipeline.tracker.cfg.primary_hold_s == 4.0
+        with pytest.raises(ValueError, match="primary_hold_s"):
+            TrackerTuning().updated({"tracks": {"primary_hold_s": 2.0}})  # not a setting of its own
         with pytest.raises(ValueError, match="stride"):
             TrackerTuning().updated({"detector": {"stride": 2}})
         with pytest.raises(ValueError, match="unknown tracker settings section"):
