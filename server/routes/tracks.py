@@ -24,7 +24,9 @@ def list_tracks(_p: Viewer, db: DbDep, start: Annotated[float | None, Query(desc
 
 
 @router.post("/{track_id}/primary", status_code=204, responses={404: {"model": Message}, 409: {"model": Message}},
-             summary="Make a live track (the telemetry's track_id) the primary target")
+             summary="Make a live track (the telemetry's track_id) the primary target",
+             description="The mount follows it until it ends, or until it has gone unseen for the aim's "
+                         "`loss_timeout_s` while another confirmed target is in view, which then takes its place.")
 def primary(track_id: RowId, ctx: CtxDep, p: Operator, db: DbDep, addr: Address) -> None:
     control.select_primary(db, ctx.runtime, p.user, addr, track_id)
 

@@ -269,7 +269,10 @@ export interface paths {
         };
         get?: never;
         put?: never;
-        /** Make a live track (the telemetry's track_id) the primary target */
+        /**
+         * Make a live track (the telemetry's track_id) the primary target
+         * @description The mount follows it until it ends, or until it has gone unseen for the aim's `loss_timeout_s` while another confirmed target is in view, which then takes its place.
+         */
         post: operations["primary_api_tracks__track_id__primary_post"];
         delete?: never;
         options?: never;
