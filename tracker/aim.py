@@ -207,9 +207,9 @@ class _AimBase:
             self._last_seen = max(self._last_seen, inp.t - inp.coasting_s)
         if inp.t - self._last_seen > cfg.loss_timeout_s:
             return (cfg.home_pan_deg, cfg.home_tilt_deg), "home"
-        if goal is not None:
-            return (cfg.pan_limits.clamp(goal[0]), cfg.tilt_limits.clamp(goal[1])), reason
-        return None, ""  # hold: keep the previous goal
+        if goal is None:
+            return None, ""  # hold: keep the previous goal
+        return (cfg.pan_limits.clamp(goal[0]), cfg.tilt_limits.clamp(goal[1])), reason
 
     def _auto_goal(self, inp: AimInput, dt: float) -> tuple[tuple[float, float] | None, str]:
         raise NotImplementedError
