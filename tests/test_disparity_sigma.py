@@ -69,7 +69,7 @@ def test_each_part_is_refined_as_refine_region_refines_it_alone() -> None:
     for r in range(ROWS):
         for c in range(COLUMNS):
             fit = refine_region(left, right, np.ones((40 // ROWS, 48 // COLUMNS), np.uint8), 56 + c * 48 // COLUMNS,
-                                40 + r * 40 // ROWS, 10.0, min_score=0.8)
+                                40 + r * 40 // ROWS, 10.0, min_score=0.8, robust=False)
             assert fit is not None
             alone.append(fit.disparity)
     assert np.allclose(ours, alone, atol=0.005)
@@ -100,15 +100,32 @@ def test_too_few_parts_stand_for_twice_the_matchers_sigma_and_the_phase_term_is_
     many = [10.0, 10.1, 9.9, 10.05, 9.95, 10.0]
     assert parts_sigma(many, 0.01) == scatter_sigma(many)
     assert parts_sigma(many[:MIN_PARTS - 1], 0.01) == FEW_PARTS_FACTOR * 0.01 == 0.02
-    from tracker.localize import PHASE_SIGMA_PX, Localizer
+    from tracker.localize import MATCH_FLOOR_PX, PHASE_SIGMA_PX, Localizer
     from tracker.rectify import Rectifier
     from tracker.sim.rig import default_rig
 
     rect = Rectifier(default_rig())
-    loc = Localizer(rect).locate(np.array([320.0, 240.0]), 10.0, 0.0, 10_000, None)
-    z = rect.f * rect.rig.baseline / 10.0  # σ_Z = Z² / (f b) σ_d with σ_d = √(0.02² + 0.012²) at the floor
-    expected = z * z / (rect.f * rect.rig.baseline) * float(np.hypot(0.02, PHASE_SIGMA_PX))
-    assert abs(loc.sigma_r - expected) < 0.05 * expected
+    for s_d in (0.0, 0.05):
+        loc = Localizer(rect).locate(np.array([320.0, 240.0]), 10.0, s_d, 10_000, None)
+        z = rect.f * rect.rig.baseline / 10.0  # σ_Z = Z² / (f b) σ_d, σ_d = √(s_d² + 0.012² + 0.010²)
+        expected = z * z / (rect.f * rect.rig.baseline) * float(np.sqrt(s_d**2 + PHASE_SIGMA_PX**2
+                                                                        + MATCH_FLOOR_PX**2))
+        assert abs(loc.sigma_r - expected) < 0.05 * expected
+
+
+def test_robust_parts_leave_out_what_the_cameras_see_differently() -> None:
+    """A flat surface at 10 px, a dark gap 2 px wide seen by the right camera alone in its second column of
+    parts: refined plainly, that column's parts are pulled off; robust (the pixels the model does not fit at
+    10 px left out, tracker.stereo.residual_outliers), every part is within 0.02 px of 10 px."""
+    left, right = _pair(0.0)
+    right = right.copy()
+    right[40:80, 56 + 18 - 10 : 56 + 20 - 10] = 10  # left columns 74-75 (parts' column 1) at d = 10
+    core = np.ones((40, 48), np.uint8)
+    plain = [p.d for p in part_fits(left[40:80], right[40:80], core, 56, 10.0, 0.5)]
+    robust = [p.d for p in part_fits(left[40:80], right[40:80], core, 56, 10.0, 0.5, robust=True)]
+    assert len(robust) == COLUMNS * ROWS
+    assert np.allclose(robust, 10.0, atol=0.02)
+    assert max(abs(d - 10.0) for d in plain) > 0.05
 
 
 def _two_depths(contrast_right: float) -> tuple[np.ndarray, np.ndarray]:

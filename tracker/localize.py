@@ -25,6 +25,13 @@ F64 = NDArray[np.float64]
 # every part of a region, so their scatter (tracker.disparity_sigma) cannot see it; on the scenes of
 # `tmeye eval` the mean error over the fraction is a sine of 0.010 to 0.021 px amplitude
 PHASE_SIGMA_PX = 0.012
+# the disparity's further 1-σ (px) that neither a region's own fit nor its parts' scatter sees, added in
+# quadrature (it was a floor, max(σ_d, 0.02 px), until the region's fit became robust, tracker.stereo.
+# outliers): over the nine plates' frames of `tmeye eval` (2026-12-03, the robust fit), the E for which
+# the errors' median over √(σ_d² + 0.012² + E²) is a Gaussian's (0.674) was 0.012 px pooled, 0.0 (walk,
+# pan, approach) to 0.025 px (occlusion, the post beside the plate) by scene; 0.010 px keeps each plate's
+# disparity within 1σ in 0.60-0.79 (pan 0.79) where the floor left pan and two-targets at 0.85 and 0.84
+MATCH_FLOOR_PX = 0.010
 
 
 def triangulate_dlt(P1: F64, P2: F64, x1: F64, x2: F64) -> F64:
@@ -134,7 +141,7 @@ class Localizer:
         cal = self.rect.rig.sigma  # the calibration's own uncertainty (tracker.calib_sigma)
         (s_cx, s_cy), s_dcal = cal.principal_px, cal.disparity_px * self.rect.f / float(self.rect.rig.left.K[0, 0])
         S = np.diag([s_c**2 + s_cx**2 + extra_px[0] ** 2, s_c**2 + s_cy**2 + extra_px[1] ** 2,
-                     max(disparity_sigma, 0.02) ** 2 + PHASE_SIGMA_PX**2 + s_dcal**2])
+                     disparity_sigma**2 + PHASE_SIGMA_PX**2 + MATCH_FLOOR_PX**2 + s_dcal**2])
         if self.solid is not None and extent_px is not None:  # a solid body: its rim; an upright one: its own x
             s_rim = self.solid.rim_sigma_px / np.sqrt(2.0)  # the outline's sides on a curved, shaded rim
             rx, ry = (s_rim, s_rim) if rim_px is None else rim_px

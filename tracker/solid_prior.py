@@ -78,13 +78,15 @@ class SolidPrior:
     - its depth behind the seen face: ρ = `upright_ratio` ± `upright_ratio_sigma` (1-σ) of its seen width.
       The seen face's mean point lies a median 0.18 of the seen width before the volume centre (0.177 to
       0.187 on the four scenes), ρ = 0.36; with the general ρ = 0.5 ranges were 0.03 to 0.05 m too far
-      on them. `upright_ratio_sigma` 0.055: the spread of the face's depth left over the disparity's, fitted
-      (2026-12-02) by Student-t (ν = 4) likelihood of the range errors under the whole range 1-σ, each
-      scene weighted alike, once a person's disparity was its seen surface's mean (tracker.disparity_sigma.
-      surface_mean): 0.055 over walk, illumination, foliage and pan, the same with two-targets, and with
-      endless. It had been 0.12 (0.067 m robust sd of the residuals on 1,221 frames against 0.056 m of the
-      disparity's 1-σ), fitted while the one whole-region fit's error, which the best-textured parts pull,
-      was in those residuals: with it the walkers' ranges were then 80-90 % within 1σ.
+      on them. `upright_ratio_sigma` 0.035: the spread of the face's depth left over the disparity's, fitted
+      by Student-t (ν = 4) likelihood of the range errors under the whole range 1-σ, each scene weighted
+      alike, replayed from the frame rows: 0.034 over walk, illumination, foliage and pan, 0.036 with
+      two-targets (2026-12-03, once the region's fit was robust, tracker.stereo.outliers, and the walkers'
+      ranges were 76-79 % within the 1-σ of 0.055). 0.055 was the same fit's (2026-12-02) once a person's
+      disparity was its seen surface's mean (tracker.disparity_sigma.surface_mean). It had been 0.12
+      (0.067 m robust sd of the residuals on 1,221 frames against 0.056 m of the disparity's 1-σ), fitted
+      while the one whole-region fit's error, which the best-textured parts pull, was in those residuals:
+      with it the walkers' ranges were then 80-90 % within 1σ.
     - seen side-on, its silhouette narrow (a walker's stride closed, or standing turned): the face is the
       side of a body as deep as it is wide, and ρ of a width that narrow puts it too near. The seen width w
       and the depth along the line of sight add up to about the body's width plus its depth whatever way
@@ -161,7 +163,7 @@ class SolidPrior:
     upright_shift_side: float = 0.0683
     upright_aspect: float = 1.5
     upright_ratio: float = 0.36
-    upright_ratio_sigma: float = 0.055
+    upright_ratio_sigma: float = 0.035
     upright_girth: float = 0.50
     upright_side_ratio: float = 0.44
     upright_side_sigma: float = 0.5

@@ -47,7 +47,7 @@ from tracker.results import Blob, PartFit
 from tracker.rim import DEFAULT_RIM, RimConfig, RimRecovery
 from tracker.split import join, own_pixels, same_body
 from tracker.stereo import RegionMatch
-from tracker.strips import MATCH_HALF, MIN_SCORE, Strips, first_window
+from tracker.strips import MATCH_HALF, MIN_SCORE, Strips, first_window, whole_outline
 from tracker.visibility import with_objects
 
 U8 = NDArray[np.uint8]
@@ -315,7 +315,8 @@ class Verifier:
         strips = self._strips(frame, blob.box, blob.mask, blob.disparity, first_window(blob.mask))
         if strips is None:
             return []
-        return part_fits(strips.left, strips.right, strips.core(blob.mask), strips.off, blob.disparity, MIN_SCORE)
+        return part_fits(strips.left, strips.right, strips.core(blob.mask), strips.off, blob.disparity, MIN_SCORE,
+                         robust=not whole_outline(blob.mask))
 
     def _outline_stereo(self, frame: StereoFrame, box: Box, m_left: BoolA,
                         d_hint: float | None) -> tuple[BoolA, BoolA, float] | None:
