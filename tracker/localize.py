@@ -27,7 +27,7 @@ F64 = NDArray[np.float64]
 PHASE_SIGMA_PX = 0.012
 # the disparity's further 1-σ (px) that neither a region's own fit nor its parts' scatter sees, added in
 # quadrature (it was a floor, max(σ_d, 0.02 px), until the region's fit became robust, tracker.stereo.
-# outliers): over the nine plates' frames of `tmeye eval` (2026-12-03, the robust fit), the E for which
+# outliers): over the eight open-loop plates' frames of `tmeye eval` (2026-12-03, the robust fit), the E for which
 # the errors' median over √(σ_d² + 0.012² + E²) is a Gaussian's (0.674) was 0.012 px pooled, 0.0 (walk,
 # pan, approach) to 0.025 px (occlusion, the post beside the plate) by scene; 0.010 px keeps each plate's
 # disparity within 1σ in 0.60-0.79 (pan 0.79) where the floor left pan and two-targets at 0.85 and 0.84

@@ -138,8 +138,8 @@ def refine_strip(T: NDArray[np.floating], S: NDArray[np.floating], w: F64 | None
     (`outliers`) are left out and the fit is done again from where it ended, up to ROBUST_ROUNDS times;
     the score stays the first fit's, over all the weighted pixels.
     """
+    first = fit = refine_gram(_band_gram(T, S, w, k), float(T.size) if w is None else float(w.sum()), p, k)
     wv = np.ones(T.size) if w is None else w
-    first = fit = refine_gram(_band_gram(T, S, wv, k), float(wv.sum()), p, k)
     for _ in range(ROBUST_ROUNDS if robust else 0):
         if fit is None:
             return None
