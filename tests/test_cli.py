@@ -38,6 +38,20 @@ def test_eval_plates_on_request() -> None:
     assert rep["scenario"] == "walk:plate" and "wide_frames" not in rep and rep["pixel_f1"] > 0.99
 
 
+def test_eval_draws_the_bodies_edges_as_a_camera_on_request() -> None:
+    plain = json.loads(tmeye("eval", "--scenario", "walk", "--frames", "12", "--json").stdout)
+    out = tmeye("eval", "--scenario", "walk", "--frames", "12", "--edge-samples", "4", "--json")
+    assert out.returncode == 0, out.stderr
+    rep = json.loads(out.stdout)
+    assert rep["edge_samples"] == 4 and plain["edge_samples"] == 1 and rep["frames"] == 12
+    assert rep["disparity_rmse_px"] != plain["disparity_rmse_px"]  # other images, the same scene
+    for args, said in ((("--scenario", "walk", "--edge-samples", "0"), "--edge-samples must be 1 to 8, got 0"),
+                       (("--scenario", "walk:plate", "--edge-samples", "4"), "'walk:plate' has none"),
+                       (("--near-wall", "--edge-samples", "2"), "--edge-samples goes with --scenario NAME or --all")):
+        bad = tmeye("eval", *args)
+        assert bad.returncode == 2 and said in bad.stderr and bad.stdout == ""
+
+
 def test_eval_writes_a_row_per_visible_frame_that_adds_up_to_the_report(tmp_path: Path) -> None:
     path = tmp_path / "frames.jsonl"
     path.write_text("kept until the run is done\n")

@@ -13,7 +13,7 @@ from tracker.frames import GimbalState
 from tracker.geometry import gimbal_rotation
 from tracker.pipeline import Pipeline
 from tracker.rectify import Rectifier
-from tracker.sim.bodies import SPHERE_R_M, BodyObject, Part, body_texture
+from tracker.sim.bodies import SPHERE_R_M, Body, BodyObject, Part, body_texture
 from tracker.sim.render import SimRenderer
 from tracker.sim.rig import default_rig
 from tracker.sim.scenarios import SimRig, get_scenario
@@ -229,3 +229,47 @@ def test_a_near_walker_is_outlined_without_the_ghost_beside_it_and_with_its_head
     head = np.zeros_like(truth)
     head[rows[0]:rows[0] + 30] = truth[rows[0]:rows[0] + 30]  # the top 30 rows of 280: the head
     assert np.count_nonzero(masks[0] & head) > 0.8 * np.count_nonzero(head)
+
+
+def _edge_row(x_edge: float, samples: int) -> tuple[np.ndarray, np.ndarray, float]:
+    """An even grey box whose left side stands at x = x_edge (m), its front 8 m ahead, before an even wall at
+    30 m: the left camera's middle row, its ids, and the front edge's true column (px)."""
+    rig = default_rig()
+    ex, ey, _ = np.eye(3)
+    wall = Surface("wall", np.array([0.0, 0.0, 30.0]), ex, ey, 40.0, 30.0, np.full((64, 64), 60, np.uint8), 0.6)
+    r = SimRenderer(rig, [wall], seed=0, edge_samples=samples)
+    front, half = 8.0, np.array([0.5, 0.5, 0.2])
+    part = Part("box", np.array([x_edge + half[0], 0.0, front + half[2]]), np.eye(3), half)
+    body = Body("box", 1, (part,), np.full((256, 256), 200.0, np.float32))
+    frame, ids = r.render(0, 0.0, GimbalState(), [body], 1.0, noisy=False)
+    v = rig.left.size[1] // 2
+    u_edge = float(rig.left.project(np.array([[x_edge, rig.left.c[1], front]]))[0][0])
+    return frame.left[v].astype(float), ids[0][v], u_edge
+
+
+@pytest.mark.parametrize("frac", [0.1, 0.3, 0.5, 0.7, 0.9])
+def test_a_body_edge_is_drawn_as_much_of_each_pixel_as_it_covers(frac: float) -> None:
+    """With edge_samples, a pixel an edge crosses takes the mean over the pixel, as a camera integrates
+    light: the edge's column read back from the grey levels (the box's share of each pixel summed) is
+    where it projects, within half the spacing of 8 rays a side (1/16 px) and a grey level's rounding;
+    drawn at the pixels' centres alone it is off by up to half a pixel. The truth (ids) stays the
+    centres'."""
+    rig = default_rig()
+    cam, want = rig.left, 299.5 + frac  # pixel 300 spans columns 299.5-300.5, left of the lens: the side is hidden
+    x_edge = float(cam.c[0])
+    for _ in range(4):  # the side's x that projects at `want` on the middle row (Newton; the lens distorts)
+        u0, u1 = (float(cam.project(np.array([[x, cam.c[1], 8.0]]))[0][0]) for x in (x_edge, x_edge + 1e-3))
+        x_edge += (want - u0) * 1e-3 / (u1 - u0)
+    errs = {}
+    for samples in (1, 8):
+        row, ids, u_edge = _edge_row(x_edge, samples)
+        wall, box = row[270], row[330]
+        share = np.clip((row[290:311] - wall) / (box - wall), 0.0, 1.0)  # the box's share of columns 290-310
+        errs[samples] = (310.5 - share.sum()) - u_edge
+        assert u_edge == pytest.approx(want, abs=0.01)
+        if samples == 1:
+            ids1 = ids
+        else:
+            np.testing.assert_array_equal(ids, ids1)
+    assert abs(errs[8]) <= 1.0 / 16.0 + 0.01
+    assert abs(errs[1]) == pytest.approx(min(frac, 1.0 - frac), abs=0.05)

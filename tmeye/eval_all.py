@@ -71,26 +71,28 @@ def by_chance(name: str, report: Mapping[str, object]) -> list[str]:
     return out
 
 
-def _one(name: str, frames: int | None, seed: int) -> dict[str, object]:
+def _one(name: str, frames: int | None, seed: int, edge_samples: int = 1) -> dict[str, object]:
     from tracker.closedloop_eval import evaluate_closed_loop
     from tracker.evaluation import run_scenario
     from tracker.sim.scenarios import get_scenario
 
     if get_scenario(name).closed_loop:
-        return evaluate_closed_loop(name, frames=frames, seed=seed, parallel=False).to_json()
-    return run_scenario(name, frames=frames, seed=seed).to_json()
+        return evaluate_closed_loop(name, frames=frames, seed=seed, parallel=False,
+                                    edge_samples=edge_samples).to_json()
+    return run_scenario(name, frames=frames, seed=seed, edge_samples=edge_samples).to_json()
 
 
 def run_all(frames: int | None, seed: int, workers: int | None = None,
-            done: Callable[[str, int, int], None] | None = None) -> dict[str, object]:
+            done: Callable[[str, int, int], None] | None = None, edge_samples: int = 1) -> dict[str, object]:
     """Every scenario of `names()`, in worker processes; {"scenarios": {name: report}, "checks": {name:
-    {line: met}}, "met": n, "missed": n, "no_frames": n}."""
+    {line: met}}, "met": n, "missed": n, "no_frames": n}. edge_samples: as
+    tracker.evaluation.run_scenario's."""
     todo = names()
     n = workers or min(len(todo), os.cpu_count() or 1)
     reports: dict[str, dict[str, object]] = {}
     ctx = multiprocessing.get_context("spawn")  # a fresh interpreter: no forked OpenCV threads
     with ProcessPoolExecutor(max_workers=n, mp_context=ctx) as pool:
-        futures = {pool.submit(_one, name, frames, seed): name for name in todo}
+        futures = {pool.submit(_one, name, frames, seed, edge_samples): name for name in todo}
         for fut in as_completed(futures):
             reports[futures[fut]] = fut.result()
             if done is not None:

@@ -171,12 +171,13 @@ def _aim_offset(truth: FrameTruth, sim: SimRig) -> tuple[float, float] | None:
 
 
 def run_loop(name: str, seed: int, frames: int | None, predictive: bool,
-             progress: Progress | None = None, rows: list[dict[str, object]] | None = None) -> RunRecord:
-    """One closed-loop run of a scenario with the predictive or the reactive controller; rows: as
-    tracker.evaluation.run_scenario's."""
+             progress: Progress | None = None, rows: list[dict[str, object]] | None = None,
+             edge_samples: int = 1) -> RunRecord:
+    """One closed-loop run of a scenario with the predictive or the reactive controller; rows and
+    edge_samples: as tracker.evaluation.run_scenario's."""
     cv2.setNumThreads(1)
     scenario = get_scenario(name)
-    sim = SimRig(scenario, seed=seed)
+    sim = SimRig(scenario, seed=seed, edge_samples=edge_samples)
     pipe = closed_loop_pipeline(sim, scenario)
     w, h = sim.rig.left.size
     aim_cfg = AimConfig(frame_width_px=w, focal_px=pipe.rect.f)
@@ -261,19 +262,21 @@ def _rms(v: list[float]) -> float:
 
 def evaluate_closed_loop(name: str, frames: int | None = None, seed: int = 0,
                          progress: Progress | None = None, parallel: bool = True,
-                         rows: list[dict[str, object]] | None = None) -> ClosedLoopReport:
+                         rows: list[dict[str, object]] | None = None, edge_samples: int = 1
+                         ) -> ClosedLoopReport:
     """Both runs of a closed-loop scenario (the reactive one in a second process when `parallel`); rows:
-    the predictive run's frames (tracker.evaluation.frame_row), as the report's detection figures are."""
+    the predictive run's frames (tracker.evaluation.frame_row), as the report's detection figures are;
+    edge_samples: as tracker.evaluation.run_scenario's."""
     t0 = time.perf_counter()
     if parallel:
         ctx = multiprocessing.get_context("spawn")  # a fresh interpreter: no forked OpenCV threads
         with ProcessPoolExecutor(max_workers=1, mp_context=ctx) as pool:
-            fut = pool.submit(run_loop, name, seed, frames, False)
-            main = run_loop(name, seed, frames, True, progress, rows)
+            fut = pool.submit(run_loop, name, seed, frames, False, None, None, edge_samples)
+            main = run_loop(name, seed, frames, True, progress, rows, edge_samples)
             reactive = fut.result()
     else:
-        main = run_loop(name, seed, frames, True, progress, rows)
-        reactive = run_loop(name, seed, frames, False)
+        main = run_loop(name, seed, frames, True, progress, rows, edge_samples)
+        reactive = run_loop(name, seed, frames, False, edge_samples=edge_samples)
     imm = _figures(prediction_errors(closed_loop_imm(), main.samples))
     psd, cv = tuned_cv(main.samples)
     assert main.detection is not None

@@ -290,16 +290,17 @@ def target_prior(scenario: Scenario) -> SolidPrior | None:
 
 def run_scenario(name: str | Scenario, frames: int | None = None, seed: int = 0, rig: StereoRig | None = None,
                  detector: DetectorConfig | None = None, progress: Progress | None = None,
-                 rows: list[dict[str, object]] | None = None) -> EvalReport:
+                 rows: list[dict[str, object]] | None = None, edge_samples: int = 1) -> EvalReport:
     """Run the pipeline on a scenario (a name, or a Scenario not in the list) and score it. `rig`: the
     calibration the pipeline uses (default: the simulator's true rig); the simulator always renders
     through its true rig. rows: a list to append a row to for each frame the target is visible in
-    (`frame_row`)."""
+    (`frame_row`). edge_samples: the simulator's rays a side over a pixel a body's edge crosses (1: each
+    pixel's centre alone; tracker.sim.bodies.Body.cast)."""
     scenario = get_scenario(name) if isinstance(name, str) else name
     name = scenario.name
     if scenario.closed_loop:
         raise ValueError(f"scenario {name!r} is closed-loop: run it with the servo evaluation")
-    sim = SimRig(scenario, seed=seed)
+    sim = SimRig(scenario, seed=seed, edge_samples=edge_samples)
     pipe = Pipeline(rig or sim.rig, detector, solid=target_prior(scenario))
     for g in survey_poses(scenario):
         pipe.learn_background(sim.background(g))

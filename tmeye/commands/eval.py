@@ -47,6 +47,9 @@ def register(subparsers: Any) -> None:
     p.add_argument("--frames-out", metavar="FILE",
                    help="with --scenario: also write one JSON line per frame the target is visible in to FILE "
                         "(what was reported and its 1-sigma, the truth, the errors and normalised errors, the blob)")
+    p.add_argument("--edge-samples", type=int, default=1, metavar="N",
+                   help="with --scenario or --all: the simulator draws each pixel a body's edge crosses as the mean of "
+                        "N x N rays over it, as a camera integrates light (default 1: each pixel's centre)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
 
@@ -78,6 +81,11 @@ def scenario_name(name: str) -> str:
 
 def run(args: argparse.Namespace) -> int:
     names = _scenarios()
+    if not 1 <= args.edge_samples <= 8:
+        raise UserError(f"--edge-samples must be 1 to 8, got {args.edge_samples}")
+    if args.edge_samples != 1 and not (args.scenario or args.all) or args.edge_samples != 1 and (
+            args.matching or args.near_wall or args.startup or args.exposure or args.alarms):
+        raise UserError("--edge-samples goes with --scenario NAME or --all")
     if args.matching:
         if args.frames_out:
             raise UserError("--frames-out writes the frames of one tracking scenario: give it with --scenario NAME")
@@ -119,6 +127,8 @@ def run(args: argparse.Namespace) -> int:
     if not args.scenario:
         raise UserError("give --scenario NAME, --all, --alarms or --list")
     args.scenario = scenario_name(args.scenario)
+    if args.edge_samples != 1 and (args.scenario in SPECIAL or not args.scenario.endswith(":body")):
+        raise UserError(f"--edge-samples changes how bodies are drawn: {args.scenario!r} has none")
     if args.scenario == "calibration":
         from calibration.scenario import run_calibration_scenario
 
@@ -171,15 +181,17 @@ def _tracking(args: argparse.Namespace, rows: list[dict[str, object]] | None = N
     rig = load_rig(args.rig) if args.rig else None
     det = DetectorConfig(epsilon=args.epsilon) if args.epsilon is not None else None
     report = run_scenario(args.scenario, frames=args.frames, seed=args.seed, rig=rig, detector=det,
-                          progress=Progress(f"eval {args.scenario}"), rows=rows)
-    return report.to_json()
+                          progress=Progress(f"eval {args.scenario}"), rows=rows, edge_samples=args.edge_samples)
+    return {**report.to_json(), "edge_samples": args.edge_samples}
 
 
 def _all(args: argparse.Namespace) -> int:
     from tmeye.eval_all import run_all, summary_lines
 
     bar = Progress("eval --all")
-    result = run_all(args.frames, args.seed, done=lambda _name, n, total: bar(n, total))
+    result = run_all(args.frames, args.seed, done=lambda _name, n, total: bar(n, total),
+                     edge_samples=args.edge_samples)
+    result["edge_samples"] = args.edge_samples
     if args.json:
         emit(result, True)
     else:
@@ -194,8 +206,9 @@ def _closed_loop(args: argparse.Namespace, rows: list[dict[str, object]] | None 
     if args.rig or args.epsilon is not None:
         raise UserError(f"--rig and --epsilon are not supported by the closed-loop scenario {args.scenario!r}")
     report = evaluate_closed_loop(args.scenario, frames=args.frames, seed=args.seed,
-                                  progress=Progress(f"eval {args.scenario}"), rows=rows)
-    return report.to_json()
+                                  progress=Progress(f"eval {args.scenario}"), rows=rows,
+                                  edge_samples=args.edge_samples)
+    return {**report.to_json(), "edge_samples": args.edge_samples}
 
 
 def _near_wall(args: argparse.Namespace) -> dict[str, object]:

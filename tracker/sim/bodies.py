@@ -130,32 +130,88 @@ class Body:
         return np.concatenate([p.corners() for p in self.parts])
 
     def cast(self, view: _ViewLike, R_wr: F64, img: U8, depth: F32, t: float, ids: U8 | None,
-             box: tuple[int, int, int, int]) -> None:
+             box: tuple[int, int, int, int], edge_samples: int = 1) -> None:
         """Ray-cast every part over the pixel box (x0, y0, x1, y1) into img (uint8), depth (distance along
-        each pixel's ray, m) and ids, z-tested: what is nearer than the depth already there is drawn."""
+        each pixel's ray, m) and ids, z-tested: what is nearer than the depth already there is drawn. depth
+        and ids are the pixel centre's; img too, or with edge_samples > 1 the mean over edge_samples²
+        rays over a pixel an edge crosses (_edges)."""
         x0, y0, x1, y1 = box
         c = R_wr @ view.cam.c
         w = view.rays[y0:y1, x0:x1].reshape(-1, 3).astype(np.float64) @ R_wr.T
-        best = depth[y0:y1, x0:x1].astype(np.float64).reshape(-1)
-        drawn = np.zeros(len(w), bool)
-        val = np.zeros(len(w), np.float64)
-        for part in self.parts:
-            dist, hit, n, uv = part.intersect(c, w)
-            hit &= dist < best
-            if not hit.any():
-                continue
-            best[hit] = dist[hit]
-            drawn |= hit
-            shade = AMBIENT + (1.0 - AMBIENT) * np.maximum(n[hit] @ SUN, 0.0)
-            val[hit] = self._sample(uv[hit]) * shade
+        behind = depth[y0:y1, x0:x1].astype(np.float64).reshape(-1)
+        best, which, val = self._trace(c, w, behind)
+        drawn = which >= 0
         if not drawn.any():
             return
         shape = (y1 - y0, x1 - x0)
         m = drawn.reshape(shape)
+        edges = (self._edges(view, R_wr, c, which.reshape(shape), behind.reshape(shape), img[y0:y1, x0:x1], box,
+                             edge_samples) if edge_samples > 1 else None)
         np.copyto(depth[y0:y1, x0:x1], best.reshape(shape).astype(np.float32), where=m)
         np.copyto(img[y0:y1, x0:x1], np.clip(np.rint(val), 0, 255).reshape(shape), where=m, casting="unsafe")
+        if edges is not None:
+            img[y0 + edges[0], x0 + edges[1]] = np.clip(np.rint(edges[2]), 0, 255).astype(np.uint8)
         if ids is not None:
             ids[y0:y1, x0:x1][m] = self.target_id
+
+    def _trace(self, c: F64, w: F64, behind: F64, only: list[NDArray[np.bool_]] | None = None
+               ) -> tuple[F64, NDArray[np.intp], F64]:
+        """Rays from c along unit w (N, 3), each drawn where a part is nearer than `behind` (N,) m: the
+        distance to what each ray meets (N,), the part it meets (-1: none) and its lit texture value.
+        only: for each part, the rays that may meet it (default all)."""
+        best = behind.copy()
+        which = np.full(len(w), -1, np.intp)
+        val = np.zeros(len(w), np.float64)
+        for k, part in enumerate(self.parts):
+            idx = np.arange(len(w)) if only is None else np.flatnonzero(only[k])
+            if idx.size == 0:
+                continue
+            dist, hit, n, uv = part.intersect(c, w[idx])
+            hit &= dist < best[idx]
+            if not hit.any():
+                continue
+            at = idx[hit]
+            best[at] = dist[hit]
+            which[at] = k
+            shade = AMBIENT + (1.0 - AMBIENT) * np.maximum(n[hit] @ SUN, 0.0)
+            val[at] = self._sample(uv[hit]) * shade
+        return best, which, val
+
+    def _edges(self, view: _ViewLike, R_wr: F64, c: F64, which: NDArray[np.intp], behind: F64, under: U8,
+               box: tuple[int, int, int, int], samples: int) -> tuple[NDArray[np.intp], NDArray[np.intp], F64]:
+        """A camera integrates light over each pixel; where the body's outline or one part's edge over
+        another crosses a pixel (its centre's part differs from a 4-neighbour's, the box's rim counting as
+        none), its value is the mean over samples² rays spread evenly over the pixel, those that miss the
+        body taking what lay under it (under: the box of the image before the cast; behind: its depth along
+        the pixel's centre ray). Sub-pixel rays: the pixel's ray moved by its derivatives along u and v
+        (central differences of view.rays; distortion is smooth over a pixel), each tested against the
+        parts its pixel's 5 x 5 centres meet. Returns the edge pixels' box rows, columns and values."""
+        lab = np.pad(which, 1, constant_values=-1)
+        core = lab[1:-1, 1:-1]
+        edge = ((core != lab[:-2, 1:-1]) | (core != lab[2:, 1:-1]) | (core != lab[1:-1, :-2])
+                | (core != lab[1:-1, 2:]))
+        ys, xs = np.nonzero(edge)
+        if ys.size == 0:
+            return ys, xs, np.zeros(0)
+        x0, y0, _, _ = box
+        rays = view.rays
+        h, w_img = rays.shape[:2]
+        gy, gx = y0 + ys, x0 + xs
+        du = (rays[gy, np.minimum(gx + 1, w_img - 1)].astype(np.float64)
+              - rays[gy, np.maximum(gx - 1, 0)]) / (np.minimum(gx + 1, w_img - 1) - np.maximum(gx - 1, 0))[:, None]
+        dv = (rays[np.minimum(gy + 1, h - 1), gx].astype(np.float64)
+              - rays[np.maximum(gy - 1, 0), gx]) / (np.minimum(gy + 1, h - 1) - np.maximum(gy - 1, 0))[:, None]
+        off = (np.arange(samples) + 0.5) / samples - 0.5
+        ou, ov = (a.reshape(-1) for a in np.meshgrid(off, off))  # (S²,) offsets in pixels
+        sub = (rays[gy, gx].astype(np.float64)[:, None, :] + ou[None, :, None] * du[:, None, :]
+               + ov[None, :, None] * dv[:, None, :]).reshape(-1, 3)
+        sub /= np.linalg.norm(sub, axis=1, keepdims=True)
+        kernel = np.ones((5, 5), np.uint8)  # a sub-ray may meet the parts its pixel's 5 x 5 centres meet
+        only = [np.repeat(cv2.dilate((which == k).astype(np.uint8), kernel)[ys, xs] > 0, ou.size)
+                for k in range(len(self.parts))]
+        _, hit_part, val = self._trace(c, sub @ R_wr.T, np.repeat(behind[ys, xs], ou.size), only)
+        bg = np.repeat(under[ys, xs].astype(np.float64), ou.size)
+        return ys, xs, np.where(hit_part >= 0, val, bg).reshape(-1, ou.size).mean(axis=1)
 
     def _sample(self, uv: F64) -> F64:
         """Bilinear texture values at surface coordinates (N, 2) m (centred on the texture, reflected)."""

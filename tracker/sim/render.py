@@ -38,7 +38,7 @@ class Solid(Protocol):
     def corners(self) -> F64: ...
 
     def cast(self, view: View, R_wr: F64, img: U8, depth: F32, t: float, ids: U8 | None,
-             box: tuple[int, int, int, int]) -> None: ...
+             box: tuple[int, int, int, int], edge_samples: int = 1) -> None: ...
 
 
 @dataclass(frozen=True)
@@ -125,8 +125,10 @@ class SimRenderer:
     done for both on the caller's thread while camera 0 is drawn. Random draws are made on the caller's
     thread, in camera order, so frames do not depend on the threads' timing."""
 
-    def __init__(self, rig: StereoRig, static: list[Surface], seed: int, noise_sigma: float = 1.2):
+    def __init__(self, rig: StereoRig, static: list[Surface], seed: int, noise_sigma: float = 1.2,
+                 edge_samples: int = 1):
         self.rig = rig
+        self.edge_samples = edge_samples  # solids: rays a side over a pixel an edge crosses (Body.cast)
         self.static = static
         self.views = (make_view(rig.left), make_view(rig.right))
         self._scene = StaticScene([v.cam for v in self.views], static)
@@ -307,5 +309,5 @@ class SimRenderer:
             if isinstance(s, Surface):
                 cast_plane_fast(view, R_wr, s, img8, depth, t, ids, b)
             else:
-                s.cast(view, R_wr, img8, depth, t, ids, b)
+                s.cast(view, R_wr, img8, depth, t, ids, b, self.edge_samples)
         self.windows[k] = (x0, y0, x1, y1)

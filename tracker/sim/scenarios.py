@@ -232,7 +232,7 @@ class SimRig:
     at each pass (`scene_t`). An endless scenario (`Scenario.script`) is never exhausted."""
 
     def __init__(self, scenario: Scenario, seed: int = 0, size: tuple[int, int] = (640, 480),
-                 rig: StereoRig | None = None, noise_sigma: float = 1.2):
+                 rig: StereoRig | None = None, noise_sigma: float = 1.2, edge_samples: int = 1):
         self.scenario = scenario
         self.rig = rig or default_rig(size)
         rng = np.random.default_rng(seed)
@@ -254,7 +254,7 @@ class SimRig:
             for o in self.objects:
                 o.visible = self._entered
         self.script = scenario.script(seed) if scenario.script is not None else None
-        self.renderer = SimRenderer(self.rig, static, seed, noise_sigma)
+        self.renderer = SimRenderer(self.rig, static, seed, noise_sigma, edge_samples)
         self.index = 0
         self._pass_start = 0  # index of the current pass's first frame
         self._last: SimFrame | None = None
