@@ -196,6 +196,8 @@ def _all(args: argparse.Namespace) -> int:
         emit(result, True)
     else:
         print("\n".join(summary_lines(result)))
+        if args.edge_samples != 1:
+            print(f"bodies' edges drawn as the mean of {args.edge_samples} x {args.edge_samples} rays a pixel")
     return 0
 
 
