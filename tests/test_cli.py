@@ -122,6 +122,8 @@ def test_track_prints_one_json_line_per_frame() -> None:
         (("bench", "--size", "10x10"), "out of range"),
         (("bench", "--scenario", "nope"), "unknown scenario 'nope'"),
         (("bench", "--scenario", "manoeuvre"), "is closed-loop"),
+        (("bench", "--scenario", "walk", "--edge-samples", "4"), "--edge-samples changes how bodies are drawn"),
+        (("bench", "--scenario", "walk:body", "--edge-samples", "9"), "--edge-samples must be 1 to 8, got 9"),
         (("track", "--source", "files", "a.mp4", "b.mp4"), "needs --rig"),
         (("track", "--rig", "/nonexistent/rig.json"), "rig file not found"),
         (("track", "--scenario", "nope"), "unknown scenario"),

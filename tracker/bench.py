@@ -52,6 +52,7 @@ class BenchReport:
     latency_ms_p99: float
     control_ms_median: float
     control_ms_p99: float
+    edge_samples: int = 1
 
     def to_json(self) -> dict[str, object]:
         d = asdict(self)
@@ -60,26 +61,31 @@ class BenchReport:
 
 
 def run_bench(size: tuple[int, int] = (640, 480), frames: int = 300, scenario: str = "walk",
-              seed: int = 0, repeats: int = 3) -> BenchReport:
+              seed: int = 0, repeats: int = 3, edge_samples: int = 1) -> BenchReport:
     """Render `frames` frames of a scenario first, then, each in its own passes over the same frames: the
     pipeline alone (stage and step times), the pipeline inside the servo loop (latency_ms_*: capture to
     command issued; control_ms_*: the part after the pipeline step), and OpenCV's MOG2 on both images.
     Each is timed in `repeats` passes; each figure is the best of its passes. Raises ValueError for a
-    closed-loop scenario (its frames depend on the loop: `tmeye eval` runs those)."""
+    closed-loop scenario (its frames depend on the loop: `tmeye eval` runs those). edge_samples: as
+    tracker.evaluation.run_scenario's (the render's cost grows with it)."""
     cv2.setNumThreads(1)
     sc = get_scenario(scenario)
     if sc.closed_loop:
         raise ValueError(f"scenario {scenario!r} is closed-loop (its frames depend on the servo loop): "
                          "time it with tmeye eval; tmeye bench takes open-loop scenarios")
-    sim = SimRig(sc, seed=seed, size=size)
+
+    def fresh() -> SimRig:
+        return SimRig(sc, seed=seed, size=size, edge_samples=edge_samples)
+
+    sim = fresh()
     backgrounds = [sim.background(g) for g in survey_poses(sc)]
     n = min(frames, sim.scenario.frames)
     rendered, render_ms = _render(sim, n)
-    render_runs = [render_ms] + [_render(SimRig(sc, seed=seed, size=size), n, keep=False)[1]
+    render_runs = [render_ms] + [_render(fresh(), n, keep=False)[1]
                                  for _ in range(repeats - 1)]
     cv2.setNumThreads(OPENCV_THREADS)
     try:
-        threaded_runs = [_render(SimRig(sc, seed=seed, size=size), n, keep=False)[1] for _ in range(repeats)]
+        threaded_runs = [_render(fresh(), n, keep=False)[1] for _ in range(repeats)]
     finally:
         cv2.setNumThreads(1)
     pipe_runs = [_time_pipeline(sim.rig, backgrounds, rendered) for _ in range(repeats)]
@@ -94,7 +100,8 @@ def run_bench(size: tuple[int, int] = (640, 480), frames: int = 300, scenario: s
     return BenchReport(scenario, size, len(rendered), {s: float(np.median(v)) for s, v in stages.items()},
                        step_med, _best(steps, 99), mog_med, mog_med / step_med, _best(render_runs, 50),
                        _best(threaded_runs, 50), OPENCV_THREADS,
-                       _best(latency, 50), _best(latency, 99), _best(control, 50), _best(control, 99))
+                       _best(latency, 50), _best(latency, 99), _best(control, 50), _best(control, 99),
+                       edge_samples)
 
 
 def _render(sim: SimRig, n: int, keep: bool = True) -> tuple[list[StereoFrame], list[float]]:

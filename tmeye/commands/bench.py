@@ -27,6 +27,9 @@ def register(subparsers: Any) -> None:
                    help="open-loop simulated scenario whose frames are timed (default walk; pan moves the cameras)")
     p.add_argument("--repeats", type=int, default=5,
                    help="passes per measurement; each figure is the best of them (default 5)")
+    p.add_argument("--edge-samples", type=int, default=1, metavar="N",
+                   help="a :body scenario's edges drawn as the mean of N x N rays a pixel (tmeye eval --edge-samples; "
+                        "default 1)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--server", action="store_true",
                    help="measure `tmeye serve` under load instead: WebSocket telemetry clients, skipped frames, "
@@ -151,6 +154,10 @@ def run(args: argparse.Namespace) -> int:
     if sc.closed_loop:
         raise UserError(f"scenario {sc.name!r} is closed-loop (its frames depend on the servo loop): time it "
                         f"with tmeye eval --scenario {sc.name}")
-    report = run_bench(size, args.frames, sc.name, repeats=args.repeats).to_json()
+    if not 1 <= args.edge_samples <= 8:
+        raise UserError(f"--edge-samples must be 1 to 8, got {args.edge_samples}")
+    if args.edge_samples != 1 and not sc.bodies:
+        raise UserError(f"--edge-samples changes how bodies are drawn: {sc.name!r} has none")
+    report = run_bench(size, args.frames, sc.name, repeats=args.repeats, edge_samples=args.edge_samples).to_json()
     emit(report, args.json)
     return 0
