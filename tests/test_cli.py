@@ -75,6 +75,19 @@ def test_eval_writes_a_row_per_visible_frame_that_adds_up_to_the_report(tmp_path
     assert not list(tmp_path.glob(".*.tmp"))  # written through a file beside it, renamed
 
 
+def test_eval_rows_give_a_wide_bodys_angle_errors_against_its_surface_and_silhouette(tmp_path: Path) -> None:
+    path = tmp_path / "walk.jsonl"
+    out = tmeye("eval", "--scenario", "walk", "--frames", "4", "--frames-out", str(path), "--json")
+    assert out.returncode == 0, out.stderr
+    rep = json.loads(out.stdout)
+    rows = [json.loads(x) for x in path.read_text().splitlines()]
+    wide = [r for r in rows if "azimuth_surface_error_deg" in r]  # the walker at 3 m, over 40 px wide
+    assert len(wide) == rep["wide_frames"] == 4
+    for key in ("azimuth_surface", "elevation_surface", "azimuth_silhouette", "elevation_silhouette"):
+        rms = float(np.sqrt(np.mean([r[f"{key}_error_deg"] ** 2 for r in wide])))
+        assert rms == pytest.approx(rep[f"{key}_rmse_wide_deg"], rel=1e-3, abs=1e-5)
+
+
 def test_eval_writes_the_closed_loops_frames_too(tmp_path: Path) -> None:
     path = tmp_path / "loop.jsonl"
     out = tmeye("eval", "--scenario", "manoeuvre", "--frames", "3", "--frames-out", str(path), "--json")

@@ -229,7 +229,7 @@ def frame_row(index: int, t: float, det: Detection, truth: tuple[float, float, f
     (error / 1-σ, as `sigma_consistency` counts them), the blob (box, area, disparity, its matcher's own 1-σ
     and the whole 1-σ the range was given, the background's disparity), the centroid's distance from the
     true silhouette's (raw left px) and, where the body is wider than WIDE_PX, the angle errors against its
-    seen surface. Lengths m, angles deg, disparities px."""
+    seen surface and against its silhouette's ray (`_wide_errors`). Lengths m, angles deg, disparities px."""
     loc, b = det.loc, det.blob
     r_t, th_t, ph_t, d_t, d_seen = truth
     row: dict[str, object] = {
@@ -249,6 +249,7 @@ def frame_row(index: int, t: float, det: Detection, truth: tuple[float, float, f
         row["truth_surface_disparity_px"] = d_seen
     if wide:
         row["azimuth_surface_error_deg"], row["elevation_surface_error_deg"] = acc.wide[-1][2:4]
+        row["azimuth_silhouette_error_deg"], row["elevation_silhouette_error_deg"] = acc.wide[-1][4:6]
     return {k: (round(v, 6) if isinstance(v, float) else v) for k, v in row.items()}
 
 
