@@ -169,6 +169,7 @@ class Pipeline:
         blobs = self.temporal.detect(frame, blobs, hints, cache(partial(self._coasting, frame)))
         blobs = join_occluded(blobs, lambda box: self._background_disparity(frame, box),  # one body, two sides
                               self.subtractor.cfg.min_depth_gap, self.rect.area_moments)
+        blobs = [b for b in blobs if not b.part_only]  # a piece at the border the rest was not found for
         blobs = [on_surface(b, partial(self.verifier.part_fits, frame, b)) for b in blobs]  # a person's: its parts'
         t2 = time.perf_counter()
         obs = np.array([[b.centroid_raw[0], b.centroid_raw[1], b.disparity] for b in blobs]).reshape(-1, 3)
@@ -301,7 +302,8 @@ class Pipeline:
                 self.schedule.not_made(later[k:])
                 break
             t = time.perf_counter()
-            new = [b for b in self.verifier.verify_all(frame, box, seek) if not _explained(b, hints, blobs)]
+            new = [b for b in self.verifier.verify_all(frame, box, seek)
+                   if not (b.part_only or _explained(b, hints, blobs))]
             self._search_ms += 0.2 * ((time.perf_counter() - t) * 1e3 - self._search_ms)
             self.schedule.searched_later(box, bool(new))
             found += [[b.centroid_raw[0], b.centroid_raw[1], b.disparity] for b in new]

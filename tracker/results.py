@@ -35,7 +35,8 @@ class Blob:
     cameras, the parts of its whole outline that matched (PartFit each; tracker.disparity_sigma.on_surface),
     its disparity their mean where at least MIN_PARTS did; for any other blob empty. disparity_sigma stays
     the matcher's own 1-σ of its one fit (the tracker's measurement noise); the 1-σ a location is given also
-    counts the parts' scatter (tracker.disparity_sigma.blob_sigma)."""
+    counts the parts' scatter (tracker.disparity_sigma.blob_sigma). part_only: a region at the left border
+    verified at the disparity of a track beyond it, kept only once joined to the rest."""
 
     box: Box
     mask: BoolA
@@ -49,6 +50,7 @@ class Blob:
     gain: float = 1.0
     one_camera: bool = False
     parts: tuple[PartFit, ...] = ()
+    part_only: bool = False  # verified at the disparity of a track beyond it (tracker.verify._border_hints)
 
 
 @dataclass(frozen=True)

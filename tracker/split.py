@@ -177,7 +177,7 @@ def join(a: Blob, b: Blob, area_moments: NDArray[np.float64], lead: Blob | None 
     area, c = mask_centroid(m8)
     sx, sy, sa, _ = cv2.mean(area_moments[box[1]:box[3], box[0]:box[2]], mask=m8)
     return replace(big, box=box, mask=mask, area=area, centroid_raw=c + (box[0], box[1]),
-                   centroid_rect=np.array([sx / sa, sy / sa]))
+                   centroid_rect=np.array([sx / sa, sy / sa]), part_only=False)
 
 
 def _union(a: Box, b: Box) -> Box:
