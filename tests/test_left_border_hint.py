@@ -4,6 +4,8 @@ new object's search there is cut short."""
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
 import numpy as np
 import pytest
 
@@ -12,7 +14,10 @@ import tracker.stereo as stereo
 import tracker.verify as verify
 from tracker.evaluation import target_prior
 from tracker.pipeline import Pipeline
+from tracker.results import Detection
+from tracker.sim.render import FrameTruth
 from tracker.sim.scenarios import SimRig, get_scenario
+from tracker.split import join_occluded
 
 
 def test_only_regions_starting_within_the_disparity_of_the_left_border_count() -> None:
@@ -24,41 +29,48 @@ def test_only_regions_starting_within_the_disparity_of_the_left_border_count() -
     assert not verify._at_left_border(np.zeros((20, 40), bool), (0, 100, 40, 120), 16.0)
 
 
-def _car_track_ids() -> list[set[int]]:
-    """occlusion:body's first 15 frames (a car side-on at 12 m entering at the left border, the post at
-    9 m splitting it): the track ids of the detections on it, per frame."""
-    scenario = get_scenario("occlusion:body")
+def _run(name: str, frames: range) -> Iterator[tuple[Pipeline, FrameTruth, list[Detection]]]:
+    """A scenario run from its start: per frame of `frames`, the pipeline, the truth and the detections on
+    target 1 (most of their pixels its own)."""
+    scenario = get_scenario(name)
     sim = SimRig(scenario)
     pipe = Pipeline(sim.rig, solid=target_prior(scenario))
     pipe.learn_background(sim.background())
-    out = []
-    for _ in range(15):
+    for i in range(frames.stop):
         sf = sim.step()
         res = pipe.step(sf.frame)
-        ids = sf.truth.ids_left
-        out.append({d.track_id for d in res.detections
-                    if np.mean(ids[d.blob.box[1]:d.blob.box[3], d.blob.box[0]:d.blob.box[2]][d.blob.mask] == 1) > 0.5})
-    return out
+        if i in frames:
+            ids = sf.truth.ids_left
+            yield pipe, sf.truth, [d for d in res.detections if np.mean(
+                ids[d.blob.box[1]:d.blob.box[3], d.blob.box[0]:d.blob.box[2]][d.blob.mask] == 1) > 0.5]
+
+
+def _car_track_ids() -> list[set[int]]:
+    """occlusion:body's first 15 frames (a car side-on at 12 m entering at the left border, the post at
+    9 m splitting it): the track ids of the detections on it, per frame."""
+    return [{d.track_id for d in on} for _, _, on in _run("occlusion:body", range(15))]
 
 
 def _plate_disparity_errors(frames: range) -> list[float]:
     """occlusion:plate (a plate leaving at the left border behind the post): its detections' disparity
     errors (px) against the truth over `frames`."""
-    scenario = get_scenario("occlusion:plate")
-    sim = SimRig(scenario)
-    pipe = Pipeline(sim.rig, solid=target_prior(scenario))
-    pipe.learn_background(sim.background())
     out = []
-    for i in range(frames.stop):
-        sf = sim.step()
-        res = pipe.step(sf.frame)
-        if i not in frames:
-            continue
-        ids, tt = sf.truth.ids_left, sf.truth.target(1)
+    for pipe, truth, on in _run("occlusion:plate", frames):
+        tt = truth.target(1)
         assert tt is not None
         _, _, d_true = pipe.rect.rig_to_rect(tt.rig[None, :])
-        out += [d.blob.disparity - float(d_true[0]) for d in res.detections
-                if np.mean(ids[d.blob.box[1]:d.blob.box[3], d.blob.box[0]:d.blob.box[2]][d.blob.mask] == 1) > 0.5]
+        out += [d.blob.disparity - float(d_true[0]) for d in on]
+    return out
+
+
+def _car_centroid_errors(frames: range) -> list[list[tuple[float, bool]]]:
+    """occlusion:body (the car behind the post, its piece left of the post at the left border): per frame
+    of `frames`, each detection on the car as (its centroid's distance from the true one in px, part_only)."""
+    out = []
+    for _, truth, on in _run("occlusion:body", frames):
+        tt = truth.target(1)
+        assert tt is not None and tt.centroid_left is not None
+        out.append([(float(np.hypot(*(d.blob.centroid_raw - tt.centroid_left))), d.blob.part_only) for d in on])
     return out
 
 
@@ -78,27 +90,6 @@ def test_a_plate_at_the_left_border_takes_its_tracks_disparity(monkeypatch: pyte
     assert max(abs(e) for e in without) > 0.3
 
 
-def _car_centroid_errors(frames: range) -> list[list[tuple[float, bool]]]:
-    """occlusion:body (the car behind the post, its piece left of the post at the left border): per frame
-    of `frames`, each detection on the car as (its centroid's distance from the true one in px, part_only)."""
-    scenario = get_scenario("occlusion:body")
-    sim = SimRig(scenario)
-    pipe = Pipeline(sim.rig, solid=target_prior(scenario))
-    pipe.learn_background(sim.background())
-    out = []
-    for i in range(frames.stop):
-        sf = sim.step()
-        res = pipe.step(sf.frame)
-        if i not in frames:
-            continue
-        ids, tt = sf.truth.ids_left, sf.truth.target(1)
-        assert tt is not None and tt.centroid_left is not None
-        out.append([(float(np.hypot(*(d.blob.centroid_raw - tt.centroid_left))), d.blob.part_only)
-                    for d in res.detections
-                    if np.mean(ids[d.blob.box[1]:d.blob.box[3], d.blob.box[0]:d.blob.box[2]][d.blob.mask] == 1) > 0.5])
-    return out
-
-
 def test_a_piece_at_the_border_not_found_anew_takes_the_disparity_of_the_rest(monkeypatch: pytest.MonkeyPatch) -> None:
     # frames 128-129: the piece left of the post, searched anew at 24.2 px against its 16.1 px, is not found;
     # verified again at the car's track's disparity it is joined to the rest beyond the post
@@ -109,11 +100,10 @@ def test_a_piece_at_the_border_not_found_anew_takes_the_disparity_of_the_rest(mo
 
 
 def test_a_piece_at_the_border_not_joined_to_the_rest_is_left_out(monkeypatch: pytest.MonkeyPatch) -> None:
-    # the same frames with the piece not joined across the post: it verified at the car's disparity stays a
+    # the same frames with the piece not joined across the post: verified at the car's disparity, it stays a
     # part only and is dropped (alone it would be a detection of its own; a false target where the rest is
     # not what its track was following: endless:plate frame 1326)
-    joined = pipeline.join_occluded
     monkeypatch.setattr(pipeline, "join_occluded",
-                        lambda blobs, *a: blobs if any(b.part_only for b in blobs) else joined(blobs, *a))
+                        lambda blobs, *a: blobs if any(b.part_only for b in blobs) else join_occluded(blobs, *a))
     frames = _car_centroid_errors(range(128, 130))
     assert all(len(f) == 1 and not f[0][1] and f[0][0] > 20.0 for f in frames)
