@@ -100,13 +100,10 @@ def _border_hints(hints: F64 | None, region: BoolA, box: Box) -> list[float]:
     tracked object's would be; the blob is a part only (Blob.part_only), kept if the pipeline joins it to
     the rest (tracker.split.join_occluded): taken alone, a plate's piece beside a post at its own depth was
     a false target (endless:plate frame 1326)."""
-    if hints is None or len(hints) == 0:
+    if hints is None or len(hints) == 0 or not region.any():
         return []
-    rows = np.flatnonzero(region.any(axis=1))
-    cols = np.flatnonzero(region.any(axis=0))
-    if rows.size == 0:
-        return []
-    y0, y1, x1 = box[1] + int(rows[0]), box[1] + int(rows[-1]), box[0] + int(cols[-1])
+    bx, by, bw, bh = cv2.boundingRect(region.view(np.uint8))  # as regions.hints_around
+    y0, y1, x1 = box[1] + by, box[1] + by + bh - 1, box[0] + bx + bw - 1
     near = sorted((float(h[0]) - x1, float(h[2])) for h in hints
                   if y0 <= h[1] <= y1 and h[0] > x1 and _at_left_border(region, box, float(h[2])))
     return [d for _, d in near]
@@ -161,7 +158,7 @@ class Verifier:
             new_later = hint is None and may_search is not None and not may_search()
             got = None if new_later or self._too_small_to_be_new(n_left, hint) else self._verify_region(
                 frame, box, cm, m_left, hint, free, around, found)
-            if got is None and hint is None and not new_later:  # searched anew at the border, not found
+            if got is None and hint is None and not new_later:  # no track's, and not found (or too small) anew
                 got = next((g for d in _border_hints(hints, m_left, box) if (g := self._verify_region(
                     frame, box, cm, m_left, d, free, around, found)) is not None), None)
                 got = None if got is None else (replace(got[0], part_only=True), got[1])
