@@ -105,7 +105,7 @@ class Localizer:
                extent_px: tuple[float, float] | None = None, rim_px: tuple[float, float] | None = None,
                in_frame: bool = True, top_px: float | None = None, swing: float | None = None,
                upright: bool | None = None, stature: tuple[float, float] | None = None,
-               gait: float | None = None) -> Localization:
+               gait: float | None = None, warped: bool = False) -> Localization:
         """extra_px: the centroid's further 1-σ (px) along x and y, where the target is seen only in part
         (tracker.visibility). extent_px: the target's seen width and height (px), for the SolidPrior.
         rim_px: the outline's 1-σ (px, x and y) from its rim's contrast (tracker.rim_contrast), in place of
@@ -119,7 +119,8 @@ class Localizer:
         lower part now hidden); None: by its seen extent (SolidPrior.upright). stature: the height (m) and its
         1-σ that the target's track measured, for an upright body placed from its top (combined with the
         SolidPrior's height_m ± height_sigma_m); None: the prior's alone. gait: how fully an upright body
-        walks (tracker.heading; None: unknown, taken as walking)."""
+        walks (tracker.heading; None: unknown, taken as walking). warped: the cameras move, so the outline is
+        drawn by warping (an upright body's y 1-σ is then SolidPrior.upright_warped_sigma's)."""
         x, y = float(centroid_rect[0]), float(centroid_rect[1])
         X_meas = self.rect.rect_to_rig(x, y, disparity)  # eq. (2)
         X_rig = X_meas
@@ -147,7 +148,7 @@ class Localizer:
             rx, ry = (s_rim, s_rim) if rim_px is None else rim_px
             w, h = extent_px
             whole = gait if from_top is None else None  # the still share: of standing bodies seen whole
-            s_up = self.solid.upright_y_sigma(h, whole) if upright else 0.0
+            s_up = self.solid.upright_y_sigma(h, whole, warped) if upright else 0.0
             if upright:  # x: its limbs and, while the cameras move (no rim contrast), the rim too
                 S[0, 0] += self.solid.upright_x_var(h, swing, whole) + (rx**2 if rim_px is None else 0.0)
             else:  # x: the rim

@@ -232,7 +232,7 @@ class Pipeline:
                                     b.area, frame.gimbal, (cx, float(np.hypot(cy, jump))), (float(w), float(h)),
                                     terms.rim_px, in_frame, top, swing, True if terms.known_person else None,
                                     None if top is None else self.extents.stature_m(track_id, self.rect.b, b.disparity),
-                                    gait)
+                                    gait, self.subtractor.left_background(frame.gimbal) is None)
         self.headings.add(track_id, frame.index, frame.t, loc.world)
         return loc
 
@@ -282,7 +282,7 @@ class Pipeline:
             shares = faint_shares(b.mask, b.box, frame.left, model[0], gain, self.rim_contrast)
         corrected = (not wide, not (wide or person))  # a curved rim's band (rim_contrast.rim_shift_px)
         return (rim_sigma_px(shares, self.rim_contrast, corrected),
-                rim_shift_px(shares, b.mask, self.rim_contrast, corrected))
+                rim_shift_px(shares, b.mask, self.rim_contrast, corrected, model is not None))
 
     def between_frames(self, deadline: float) -> None:
         """In real time, after a frame's results are out and before the next frame is due (`deadline`,

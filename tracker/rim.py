@@ -71,6 +71,13 @@ two-targets 0.043 -> 0.033° / 0.206 -> 0.152°; the plates unchanged. Without t
 keys' tests the plates grew a fringe on smooth ground (walk:plate centroid RMSE 0.000 -> 0.085 px); a
 looser rule, the temporal picture alone enough where one key's test cannot be made, joined more than the
 body (walk:body F1 0.951 -> 0.929).
+
+Where the temporal picture decides (2026-12-04; docs/evaluation.md has the figures). A walker's foot stands
+at the ground's depth, so the stereo pictures cannot tell it from the ground (C_s about C_o), but over a
+window the learnt background can: recover_rim also joins a pixel where C_o + n_W model_margin < C_t and
+C_o <= C_s, where that background explains the pixels about the object (`_model_holds`). And in
+recover_rim_keys a pixel where neither key's test can be made (the ground between a walker's legs, nearer
+together than Δd) joins only where C_o < C_t.
 """
 
 from __future__ import annotations
@@ -103,7 +110,8 @@ class RimConfig:
     d (1 ± slant), the depths of its parts that lie off its matched surface. key_rounds, key_margin:
     the rounds and the margin of recover_rim_keys (its rounds are not kept to the outline's box, only to
     the pictures: RimRecovery works band_px + window_px beyond the box, joining up to half a window from
-    the pictures' edge)."""
+    the pictures' edge). model_margin: how much better the object must match than the temporal picture, in
+    grey levels a pixel, where that picture alone decides in recover_rim (0: it never does)."""
 
     band_px: int = 3
     window_px: int = 5
@@ -112,15 +120,16 @@ class RimConfig:
     key_rounds: int = 8
     key_margin: int = 1
     slant: float = 0.04
+    model_margin: int = 1
 
     def __post_init__(self) -> None:
         if (not (1 <= self.window_px <= 15 and self.window_px % 2 == 1) or self.band_px < 1 or self.margin < 0
-                or min(self.rounds, self.key_rounds) < 1 or self.key_margin < 0
+                or min(self.rounds, self.key_rounds) < 1 or min(self.key_margin, self.model_margin) < 0
                 or not 0.0 <= self.slant < 0.5):
             raise ValueError(f"rim window_px must be odd in 1..15, band_px and (key_)rounds >= 1, "
-                             f"(key_)margin >= 0 and slant in [0, 0.5), got {self.window_px}, "
+                             f"(key_, model_)margin >= 0 and slant in [0, 0.5), got {self.window_px}, "
                              f"{self.band_px}, {self.rounds}, {self.key_rounds}, {self.margin}, "
-                             f"{self.key_margin}, {self.slant}")
+                             f"{self.key_margin}, {self.slant}, {self.model_margin}")
 
 
 class Pictures:
@@ -168,15 +177,32 @@ class Pictures:
 def recover_rim(obj: BoolA, pictures: Pictures, allowed: BoolA, cfg: RimConfig) -> BoolA:
     """The object's mask with its rim recovered. obj: the object's mask and allowed where pixels may join
     (the background known and still, no other object's), over the box of `pictures`, which must hold the
-    temporal picture: a pixel joins where C_o + n_W margin < min(C_s, C_t)."""
+    temporal picture: a pixel joins where C_o + n_W margin < min(C_s, C_t), or, where the temporal picture
+    explains the background about the object (`_model_holds`), where C_o + n_W model_margin < C_t and
+    C_o <= C_s: the temporal picture says object and the stereo pictures do not say background (a
+    walker's shaded foot on the ground of its grey stands at the ground's depth, so C_s is about C_o)."""
     if pictures.c_t is None:
         raise ValueError("recover_rim needs the temporal picture (the cameras still)")
     band = (cv2.dilate(obj.view(np.uint8), _band_kernel(cfg)) > 0) & ~obj & allowed  # the first round's
     if not band.any():
         return obj  # nowhere to grow: no costs to work out
     n_w = cfg.window_px * cfg.window_px  # the thresholds are per pixel: Σ over W = n_w times the mean
-    better = pictures.c_o + n_w * cfg.margin < np.minimum(pictures.c_s, pictures.c_t)
+    c_o, c_s, c_t = pictures.c_o, pictures.c_s, pictures.c_t
+    better = c_o + n_w * cfg.margin < np.minimum(c_s, c_t)
+    if _model_holds(obj, c_t, allowed, cfg):
+        better |= (c_o + n_w * cfg.model_margin < c_t) & (c_o <= c_s)
     return _grow(obj, band, allowed, lambda _, b: b & better, cfg)
+
+
+def _model_holds(obj: BoolA, c_t: NDArray[np.int32], allowed: BoolA, cfg: RimConfig) -> bool:
+    """Whether the temporal picture explains the background about the object: the median of C_t over the
+    allowed pixels beyond three bands of it is under n_W model_margin (a mean under model_margin grey levels
+    a pixel). A global gain taken on a ring that another object's light skews leaves C_t high everywhere
+    (endless:plate frame 1325: gains 1.70 and 1.23 in two boxes of one frame, medians 349 and 91), and the
+    picture then says object for the background too."""
+    far = allowed & ~(cv2.dilate(obj.view(np.uint8), _band_kernel(cfg), iterations=3) > 0)
+    n_w = cfg.window_px * cfg.window_px
+    return bool(far.any()) and float(np.median(c_t[far])) < n_w * cfg.model_margin
 
 
 def _grow(obj: BoolA, band: BoolA, allowed: BoolA, joins: Callable[[BoolA, BoolA], BoolA], cfg: RimConfig,
@@ -241,6 +267,7 @@ def recover_rim_keys(obj: BoolA, pictures: Pictures, left_bg: U8, ahead: I32, be
     if pictures.c_t is not None:  # cameras still: the temporal picture explains the background too
         c_s, c_r = np.minimum(c_s, pictures.c_t), np.minimum(c_r, pictures.c_t)
     by_left, by_right = c_o + n_w * cfg.key_margin < c_s, c_o + n_w * cfg.key_margin < c_r
+    by_model = None if pictures.c_t is None else c_o < pictures.c_t  # the temporal picture says object
 
     def lands_on(near: BoolA, at: I32, ys: NDArray[np.intp], xs: NDArray[np.intp], side: int) -> BoolA:
         r, c = at[ys, xs, 0], at[ys, xs, 1]
@@ -251,9 +278,11 @@ def recover_rim_keys(obj: BoolA, pictures: Pictures, left_bg: U8, ahead: I32, be
         ys, xs = np.nonzero(band & matches)
         near = cv2.dilate(o.view(np.uint8), _ROW3) > 0  # a pixel's tolerance along the row
         # each key's test says object, or cannot be made: it lands on the object itself
-        on_ahead = lands_on(near, ahead, ys, xs, 1)
+        on_ahead, on_behind = lands_on(near, ahead, ys, xs, 1), lands_on(near, behind, ys, xs, -1)
         ok = by_left[ys, xs] | on_ahead
-        ok &= by_right[ys, xs] | lands_on(near, behind, ys, xs, -1)
+        ok &= by_right[ys, xs] | on_behind
+        if by_model is not None:  # neither test made (between a walker's legs): the temporal picture decides
+            ok &= ~(on_ahead & on_behind) | by_model[ys, xs]
         if stereo is not None:  # not where the object hides the pixel's background: its occlusion shadow
             ok |= stereo[ys, xs] & ~on_ahead
         out = np.zeros_like(o)
