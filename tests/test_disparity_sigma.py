@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from tracker.disparity_sigma import (
     COLUMNS,
     FEW_PARTS_FACTOR,
+    FEW_PARTS_PERSON_PX,
     MIN_PARTS,
     ROWS,
     blob_sigma,
@@ -181,7 +184,11 @@ def test_on_surface_moves_a_persons_disparity_and_keeps_its_parts() -> None:
         raise AssertionError("parts matched again")
 
     assert blob_sigma(moved, never) == mean[1]  # its 1-σ: its parts' mean's, from the parts it keeps
-    assert blob_sigma(few, never) == FEW_PARTS_FACTOR * 0.01  # too few: twice the matcher's, not matched again
+    # too few to tell, a person's: at least FEW_PARTS_PERSON_PX (twice the matcher's would be 0.02 px), not
+    # matched again; a ball with too few: twice the matcher's
+    assert blob_sigma(few, never) == FEW_PARTS_PERSON_PX > FEW_PARTS_FACTOR * 0.01
+    few_ball = replace(blob(80, 80), parts=tuple(fits[:MIN_PARTS - 1]))
+    assert blob_sigma(few_ball, never) == FEW_PARTS_FACTOR * 0.01
 
     for other in (blob(80, 80), blob(40, 100, one_camera=True)):  # a ball; a person seen by one camera
         assert on_surface(other, never) is other

@@ -200,6 +200,27 @@ def test_an_outline_short_of_a_persons_stature_at_its_disparity_says_by_how_much
     assert prior.short_of_stature_px(46.0, 22.0, 0.0) == 0.0
 
 
+def test_a_person_seen_in_part_is_as_uncertain_as_its_depth_behind_what_is_seen() -> None:
+    # an outline under part_share of a person's height at its disparity (its legs hidden): the centre's depth
+    # behind the seen face has a 1-σ of at least part_depth_sigma_m (px at the face's depth: m d / b); seen
+    # whole, behind_face_px's stands
+    prior = SolidPrior()
+    d, b = 22.0, 0.3
+    whole = prior.behind_face_px(40.0, 120.0)
+    assert prior.seen_in_part(whole, 120.0, d, b) == whole  # 120 of 125 px
+    part = prior.seen_in_part(whole, 60.0, d, b)  # 60 of 125 px
+    assert part == (whole[0], pytest.approx(prior.part_depth_sigma_m * d / b)) and part[1] > whole[1]
+    assert prior.seen_in_part(whole, 60.0, d, 0.0) == whole
+    # the localiser widens σ_r by it: about part_depth_sigma_m in metres
+    rect = Rectifier(default_rig())
+    dz = rect.f * rect.rig.baseline / 10.0
+    args = (np.array([360.0, 220.0]), dz, 0.05, 3000, None, (0.0, 0.0))
+    stature = 1.7 * dz / rect.rig.baseline
+    seen = Localizer(rect, solid=prior).locate(*args, (0.3 * stature, stature))
+    legs_hidden = Localizer(rect, solid=prior).locate(*args, (0.3 * stature, 0.5 * stature))
+    assert seen.sigma_r < 0.05 < prior.part_depth_sigma_m * 0.95 < legs_hidden.sigma_r
+
+
 def test_a_wide_body_has_its_own_depth_prior() -> None:
     # a vehicle side-on (width >= 2 x height): ρ = wide_ratio ± wide_ratio_sigma of its seen height (its
     # smaller extent); just under the aspect, the general ρ ± σ_ρ

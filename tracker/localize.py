@@ -131,6 +131,7 @@ class Localizer:
         if self.solid is not None and extent_px is not None:
             behind = self.solid.behind_face_px(*extent_px, upright=upright)
             if upright:
+                behind = self.solid.seen_in_part(behind, extent_px[1], disparity, self.rect.b)
                 if top_px is not None:
                     from_top = self._below_top(top_px, disparity, behind[0], stature)
                     y = from_top[0]

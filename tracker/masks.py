@@ -173,6 +173,19 @@ def seen_changed(mask: BoolA, changed: BoolA, key: BoolA) -> BoolA:
     return half_or_whole(mask & (changed | key), mask)
 
 
+def changed_part(mask: BoolA, key: U8, bg: NDArray[np.float32], g: float, eps: int) -> BoolA:
+    """A person's outline (h, w) less the background seen through it: its pixels unlike the temporal
+    background (|Γ - g B| > ε; key and bg the box's (h, w) left image and background), or the whole outline
+    where those are under half of it (half_or_whole). The outline is filled (with_head closes and fills the
+    gaps between a walker's legs and under its arms: 12 % of a standing walker's outline at 13 m on
+    endless:body, frame 1800), and a part of it holding that background matches between the body's depth
+    and the background's (tracker.disparity_sigma.part_fits). Against the seen surface's disparity, the
+    parts' mean over the whole outline was off by a median 0.073 px on endless:body's 1,116 even frames
+    with a person's outline, over its changed pixels 0.046 px, over the true silhouette's pixels 0.043 px
+    (an oracle); walk:body's gaps are narrower: 0.090, 0.097 and 0.098 px."""
+    return half_or_whole(mask & (change(key, bg, g) > eps), mask)
+
+
 def half_or_whole(part: BoolA, whole: BoolA) -> BoolA:
     """`part` of a region to match on where it is at least half of `whole`, else `whole` (what is left would
     be too little to match on)."""

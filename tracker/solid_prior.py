@@ -94,19 +94,30 @@ class SolidPrior:
       disparity was its seen surface's mean (tracker.disparity_sigma.surface_mean). It had been 0.12
       (0.067 m robust sd of the residuals on 1,221 frames against 0.056 m of the disparity's 1-σ), fitted
       while the one whole-region fit's error, which the best-textured parts pull, was in those residuals:
-      with it the walkers' ranges were then 80-90 % within 1σ.
+      with it the walkers' ranges were then 80-90 % within 1σ. Refitted (2026-12-04, the same likelihood
+      with endless and two-targets too) once a person's parts were matched on its changed pixels and one
+      whose parts cannot be told had a disparity 1-σ of its own (tracker.disparity_sigma,
+      FEW_PARTS_PERSON_PX): 0.015, with `upright_side_sigma` 0.20 (below); at 0.035 and 0.5 the walkers'
+      ranges were 79-82 % within 1σ (NEES 0.72-0.77), at 0.015 and 0.20 76-78 % (NEES 0.87-0.99).
     - seen side-on, its silhouette narrow (a walker's stride closed, or standing turned): the face is the
       side of a body as deep as it is wide, and ρ of a width that narrow puts it too near. The seen width w
       and the depth along the line of sight add up to about the body's width plus its depth whatever way
       it is turned (exactly for a box turned 0 or 90°), g h with g = `upright_girth` (the simulator's
       person: 0.6 + 0.22 m over 1.69 m); the face's mean lies κ (g h - w) before the volume centre, κ =
       `upright_side_ratio`, where that exceeds ρ/2 · w, with a 1-σ of `upright_side_sigma` times itself.
-      Fitted (Student-t) over 1,428 upright frames of walk, illumination, foliage, pan and two-targets:
-      κ 0.44, g 0.50; on its 207 side-on frames the residuals' robust sd was 0.096 m against 0.061 m
-      elsewhere, so the 1-σ is half the depth. Where the silhouette was narrow (seen width under 0.3 of
-      its height) ranges had been 0.15-0.23 m too near on walk, illumination and foliage (NEES 4.8-13 on
-      those frames); range RMSE walk 0.103 -> 0.095 m, illumination 0.104 -> 0.097, foliage 0.104 ->
-      0.099, pan 0.082 -> 0.077, two-targets 0.101 -> 0.099, endless 0.394 either way.
+      Fitted (Student-t) over 1,428 upright frames of walk, illumination, foliage, pan and two-targets: κ 0.44, g
+      0.50; on its 207 side-on frames the residuals' robust sd was 0.096 m against 0.061 m elsewhere, so the 1-σ
+      was half the depth (0.20 of it since the refit above). Where the silhouette was narrow (seen width under 0.3
+      of its height) ranges had been 0.15-0.23 m too near on walk, illumination and foliage (NEES 4.8-13 on those
+      frames); range RMSE walk 0.103 -> 0.095 m, illumination 0.104 -> 0.097, foliage 0.104 -> 0.099, pan 0.082 ->
+      0.077, two-targets 0.101 -> 0.099, endless 0.394 either way.
+    - seen in part (its outline under `part_share` of a person's height at its disparity: its legs hidden
+      behind a post or the image's edge, or only its legs seen), the seen width says little of the depth
+      behind what is seen: that depth's 1-σ is at least `part_depth_sigma_m` (seen_in_part). On
+      endless:body's 365 such frames the range error left once the face's disparity error is taken out
+      was 0.057 m rms, against 0.026-0.029 m where more of the body is seen; 0.115 m, about half a
+      person's depth, is the Student-t fit (as above, six scenes), and took endless:body's range NEES 2.20
+      -> 1.30 (share 0.6; 0.7 and 0.8 fitted 0.105 and 0.055 m, NEES 1.29 and 1.43).
     - the centroid's 1-σ along x: h (a² + b² s²)^½ (h the seen height, a = `upright_x_sigma`, b =
       `upright_swing_sigma`, s the share of its limbs' swing seen across the image, tracker.heading), in
       place of the rim's term, the hull gap's and the outline's edge term along x (tracker.pipeline: the
@@ -172,10 +183,10 @@ class SolidPrior:
     upright_shift_side: float = 0.0683
     upright_aspect: float = 1.5
     upright_ratio: float = 0.36
-    upright_ratio_sigma: float = 0.035
+    upright_ratio_sigma: float = 0.015
     upright_girth: float = 0.50
     upright_side_ratio: float = 0.44
-    upright_side_sigma: float = 0.5
+    upright_side_sigma: float = 0.20
     upright_x_sigma: float = 0.0028
     upright_swing_sigma: float = 0.0048
     upright_still_sigma: float = 0.0013
@@ -183,6 +194,8 @@ class SolidPrior:
     wide_aspect: float = 2.0
     wide_ratio: float = 1.2
     wide_ratio_sigma: float = 0.25
+    part_share: float = 0.6
+    part_depth_sigma_m: float = 0.115
 
     def upright(self, width_px: float, height_px: float) -> bool:
         """Whether a target seen width_px wide and height_px high is an upright body (a person)."""
@@ -214,6 +227,16 @@ class SolidPrior:
         s = self.upright_warped_sigma if warped else self.upright_sigma
         s0 = min(self.upright_still_y_sigma, s)
         return height_px * float(np.sqrt(s0**2 + (s**2 - s0**2) * weight))
+
+    def seen_in_part(self, behind: tuple[float, float], height_px: float, disparity: float, baseline_m: float
+                     ) -> tuple[float, float]:
+        """An upright body's behind_face_px (depth, 1-σ; px at the face's depth, times Z / f = b / d: m), its
+        1-σ at least part_depth_sigma_m where its outline, height_px high, is under part_share of a person
+        of height_m at its disparity (px; baseline_m the rig's): seen in part (its legs hidden, or only its
+        legs seen), the seen width says little of the depth behind what is seen."""
+        if baseline_m <= 0 or height_px >= self.part_share * self.height_m * disparity / baseline_m:
+            return behind
+        return behind[0], max(behind[1], self.part_depth_sigma_m * disparity / baseline_m)
 
     def short_of_stature_px(self, height_px: float, disparity: float, baseline_m: float) -> float:
         """How much shorter (px) an upright outline height_px high is than a person of height_m at its

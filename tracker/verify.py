@@ -24,6 +24,7 @@ from tracker.growth import grow_tracked
 from tracker.masks import (
     NEAR,
     changed_holes_filled,
+    changed_part,
     found_pixels,
     key_mask,
     largest_component,
@@ -334,12 +335,25 @@ class Verifier:
     def part_fits(self, frame: StereoFrame, blob: Blob) -> list[PartFit]:
         """The disparities (px), 1-σ (px) and pixel counts of the parts of a verified blob (tracker.
         disparity_sigma.part_fits: the window `match_object` uses first cut into a grid, each part refined
-        from the blob's disparity on the same strips); the parts that do not match are left out."""
+        from the blob's disparity on the same strips); the parts that do not match are left out. A person's
+        are matched on the pixels of its outline that changed (_changed_part), any other's robustly."""
         strips = self._strips(frame, blob.box, blob.mask, blob.disparity, first_window(blob.mask))
         if strips is None:
             return []
-        return part_fits(strips.left, strips.right, strips.core(blob.mask), strips.off, blob.disparity, MIN_SCORE,
-                         robust=not whole_outline(blob.mask))
+        whole = whole_outline(blob.mask)
+        seen = self._changed_part(frame, blob) if whole else blob.mask
+        return part_fits(strips.left, strips.right, strips.core(seen), strips.off, blob.disparity, MIN_SCORE,
+                         robust=not whole)
+
+    def _changed_part(self, frame: StereoFrame, blob: Blob) -> BoolA:
+        """masks.changed_part of a person's outline with the cameras still (its temporal background at this
+        pose); the whole outline while they move."""
+        model = self.sub.left_background(frame.gimbal)
+        if model is None:
+            return blob.mask
+        x0, y0, x1, y1 = blob.box
+        return changed_part(blob.mask, frame.left[y0:y1, x0:x1], model[0][y0:y1, x0:x1], blob.gain,
+                            self.cfg.epsilon)
 
     def _outline_stereo(self, frame: StereoFrame, box: Box, m_left: BoolA,
                         d_hint: float | None) -> tuple[BoolA, BoolA, float] | None:
