@@ -235,13 +235,30 @@ class Verifier:
         # may be wrong behind the centre alone (SGBM carries a post's disparity into a smooth ground; endless:
         # body, elevation 0.744 -> 0.630 deg); a misregistered background patch lies at its own by both
         gap, gap_px = cfg.min_depth_gap, cfg.min_disparity_gap_px
-        if not (in_front(fine.disparity, d_bg, gap, gap_px)
-                or in_front(fine.disparity, median_behind(cm, obj), gap, gap_px)):
-            return None  # not in front of the background: a misregistered background patch
+        behind = median_behind(cm, obj)
+        if not (in_front(fine.disparity, d_bg, gap, gap_px) or in_front(fine.disparity, behind, gap, gap_px)):
+            far = self._seen_through(cm, obj, fine.disparity, min(d_bg, behind), d_hint)
+            if far is None or not in_front(fine.disparity, far, gap, gap_px):
+                return None  # not in front of the background: a misregistered background patch
+            d_bg = far
         # eq. (10) in rectified coordinates, pixels weighted by their area: Σ a x / Σ a, Σ a y / Σ a
         sx, sy, sa, _ = cv2.mean(self.rect.area_moments[y0:y1, x0:x1], mask=m8)
         return Blob(box, obj, area, c_raw, np.array([sx / sa, sy / sa]), fine.disparity, fine.sigma, d_bg,
                     fine.score, gain), changed
+
+    def _seen_through(self, cm: CorrespondenceMap, obj: BoolA, d: float, d_bg: float, d_hint: float | None
+                      ) -> float | None:
+        """The background's disparity about a tracked object (d_hint: its track's prediction) where the map
+        puts the background behind it nearer than the object itself, by the depth-gap test the other way
+        (d_bg in front of d): the object is seen there by both cameras, so nothing nearer stands before it
+        and the map is wrong (semi-global matching carries a post's disparity into the band left of it the
+        right camera cannot see). Then the farthest known background about it: the 10th percentile of the
+        map's disparity over the box's known pixels outside the object. None otherwise."""
+        gap, gap_px = self.cfg.min_depth_gap, self.cfg.min_disparity_gap_px
+        if d_hint is None or not in_front(d_bg, d, gap, gap_px):
+            return None
+        around = cm.disparity[~obj & cm.valid]
+        return float(np.percentile(around, 10)) if around.size else None
 
     def _tracked_outline(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap, model: tuple[F32, F32],
                          m_left: BoolA, d_hint: float, free: BoolA, around: list[float], found: list[Blob] | None
