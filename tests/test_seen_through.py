@@ -38,9 +38,9 @@ def test_a_tracked_object_before_a_map_nearer_than_itself_is_judged_by_the_farth
 
 
 def test_a_walker_beside_a_post_keeps_its_legs() -> None:
-    """endless:body frame 210: a walker standing beside a post (25.3 px before a hedge at 7.4 px), whose
-    legs' region the map puts behind the post's disparity carried leftwards (29.3-29.9 px): the legs are in
-    its outline (1,065 px of them were left out when the region was refused)."""
+    """endless:body frame 210: a walker standing beside a post, whose legs' region (matched at 25.1 px) the
+    map puts behind the post's disparity carried leftwards (29.9 px): the legs are in its outline (1,065 px
+    of them were left out when the region was refused)."""
     pipe, sf, res = run_frames("endless:body", 211)
     tt = sf.truth.target(1)
     det = next(d for d in res.detections if _on(d, tt, sf.truth.ids_left))
