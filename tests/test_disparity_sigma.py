@@ -187,6 +187,8 @@ def test_on_surface_moves_a_persons_disparity_and_keeps_its_parts() -> None:
     # too few to tell, a person's: at least FEW_PARTS_PERSON_PX (twice the matcher's would be 0.02 px), not
     # matched again; a ball with too few: twice the matcher's
     assert blob_sigma(few, never) == FEW_PARTS_PERSON_PX > FEW_PARTS_FACTOR * 0.01
+    none = on_surface(person, lambda: [])  # none of its parts matched: not matched again either
+    assert none.parts == () and blob_sigma(none, never) == FEW_PARTS_PERSON_PX
     few_ball = replace(blob(80, 80), parts=tuple(fits[:MIN_PARTS - 1]))
     assert blob_sigma(few_ball, never) == FEW_PARTS_FACTOR * 0.01
 

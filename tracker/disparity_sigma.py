@@ -125,9 +125,10 @@ def blob_sigma(blob: Blob, fits: Callable[[], list[PartFit]]) -> float:
         mean = surface_mean(list(blob.parts))
         if mean is not None:
             return mean[1]
-    parts = list(blob.parts) or fits()
+    person = whole_outline(blob.mask)  # its parts are those on_surface kept, none matched again
+    parts = list(blob.parts) if blob.parts or person else fits()
     sigma = parts_sigma([f.d for f in parts], blob.disparity_sigma, [f.sigma for f in parts])
-    if len(parts) < MIN_PARTS and whole_outline(blob.mask):  # a person whose parts cannot be told
+    if person and len(parts) < MIN_PARTS:  # a person whose parts cannot be told
         return max(sigma, FEW_PARTS_PERSON_PX)
     return sigma
 
