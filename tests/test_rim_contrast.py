@@ -9,6 +9,7 @@ import math
 
 import cv2
 import numpy as np
+import pytest
 from sim_helpers import run_frames
 
 from tracker.localize import Localizer
@@ -92,6 +93,17 @@ def test_a_faint_sides_lost_band_is_undone_towards_it() -> None:
     assert rim_sigma_px(shares, CFG, (True, True))[0] < rim_sigma_px(shares, CFG)[0]
     # both sides as faint: nothing to undo
     assert rim_shift_px((0.5, 0.5, 0.2, 0.2), mask, CFG) == (0.0, 0.0)
+
+
+def test_a_still_balls_faint_side_loses_a_band_of_fixed_width_a_persons_a_share_of_its_size() -> None:
+    shares = (0.0, 1.0, 0.0, 0.0)  # the right side's rim all faint
+    small, large = np.ones((20, 20), bool), np.ones((120, 120), bool)
+    for mask in (small, large):  # a ball, the cameras still: half the fixed band, whatever its size
+        assert rim_shift_px(shares, mask, CFG, still=True)[0] == pytest.approx(0.5 * CFG.ball_band_still_px)
+    person = [rim_shift_px(shares, m, CFG, still=True, upright=True)[0] for m in (small, large)]
+    assert person[1] == pytest.approx(6.0 * person[0]) and person[0] == pytest.approx(0.5 * CFG.band_still[0] * 20)
+    # the cameras moving: a share of the size for every body
+    assert rim_shift_px(shares, large, CFG)[0] == pytest.approx(0.5 * CFG.band[0] * 120)
 
 
 def test_the_localiser_takes_the_rims_sigma_in_place_of_the_fixed_one() -> None:

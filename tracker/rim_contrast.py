@@ -55,6 +55,26 @@ the shares from the learnt background) is 1.24 % along y, `band` (moving, the st
 before; along x the same fit gave 0.0026 -> 0.0032, left at the eight scenes' 1.06 %. approach:body's
 elevation RMSE against the seen surface 0.0210 -> 0.0135° (0.0150° before the recovery's change).
 
+A ball's faint side along x, the cameras still (2026-12-04): on approach:body's 300 frames (the sphere at
+30 to 0.9 m, 11 to 152 px across) the x error of eq. (10)'s centroid against the true silhouette's,
+fitted as ½ c (f_right - f_left), left 0.102 px rms with a fixed band c = 0.78 px, 0.143 px with a share
+of the size (1.09 %, fitted on the same frames), 0.180 px undone by neither. Fitted alone by the ball's
+disparity over its background's, c was 0.40 px at 5-10 px, 1.0 at 10-20, 0.87 at 20-40 and 0.23 at 40-80
+(the nearest frames, 83-152 px across, where 1.06 % of the size says 0.9-1.6 px): the outer pixel or so
+of a faint limb that the rim's recovery leaves out (tracker.rim), not a share of the ball, so
+`ball_band_still_px`. Along y the share fits better (0.078 against 0.106 px rms: the shaded bottom of the
+ball lit from above, wide only when near), and so it does along x on the walkers (walk:body 0.328
+against 0.404 px rms), whose faint side loses a share of a limb. A larger share for them (1.49 %, fitted
+on walk, illumination, foliage, two-targets and endless alike) moved their centroids nearer their
+silhouettes' (walk:body's azimuth RMSE against the silhouette's ray 0.0436 -> 0.0398°) but their angles
+away from the seen surface's (0.0544 -> 0.0575°) and the volume centre's: left at 1.06 %. `tmeye eval
+--all`: approach:body's azimuth RMSE against the seen surface 0.0227 -> 0.0167° over its 74 wide frames
+(within 1σ 0.750 -> 0.743, NEES 0.895 -> 0.884), against the volume centre 0.0442 -> 0.0491°: at 2-5 m
+(32 frames) the ray moved by about -0.007° against both, the surface's mean error +0.022 -> +0.015°,
+the centre's -0.058 -> -0.065° (a bias that is not the ray's); beyond 5 m the centre's RMSE went 0.0173
+-> 0.0134°. Every other figure within 0.001 of its own but two-targets:body's azimuth NEES 0.340 ->
+0.342 and endless:body's 1.313 -> 1.306.
+
 With the cameras moving there is no temporal model; a rim pixel's residual against its background then
 comes from the stereo pair (`stereo_residual`: eq. (9)'s left key where its test can be made, else the
 right key's), the same faint_level and side_px. On manoeuvre:body (a sphere tracked while the mount turns)
@@ -88,13 +108,16 @@ class RimContrastConfig:
     side's 1-σ (px) where all of its rim is faint and its expected loss is not undone (a vehicle's faces, a
     person's top and bottom); band: the band a wholly faint curved side loses, as a share of the body's size
     √(w h) (px), along x and y (`rim_shift_px`), with the cameras moving, band_still with them still (the
-    learnt background recovers more of it); corrected_side_px: a side's 1-σ (px, x and y) left where that
+    learnt background recovers more of it); ball_band_still_px: with the cameras still, the band (px) a
+    wholly faint side of a body neither upright nor wide (a ball) loses along x, a fixed width in place of
+    band_still's share of its size; corrected_side_px: a side's 1-σ (px, x and y) left where that
     loss is undone (see the module's docstring)."""
 
     faint_level: float = 24.0
     side_px: float = 1.7
     band: tuple[float, float] = (0.0106, 0.017)
     band_still: tuple[float, float] = (0.0106, 0.0124)
+    ball_band_still_px: float = 0.78
     corrected_side_px: tuple[float, float] = (1.4, 0.9)
 
 
@@ -183,16 +206,20 @@ def rim_sigma_px(shares: tuple[float, float, float, float], cfg: RimContrastConf
 
 
 def rim_shift_px(shares: tuple[float, float, float, float], mask: BoolA, cfg: RimContrastConfig,
-                 corrected: tuple[bool, bool] = (True, True), still: bool = False) -> tuple[float, float]:
+                 corrected: tuple[bool, bool] = (True, True), still: bool = False, upright: bool = False
+                 ) -> tuple[float, float]:
     """How far (px, x and y) the true silhouette's centroid lies from eq. (10)'s on the outline's pixels,
     towards its fainter sides: a curved body's side whose rim is faint (shaded, curving away) loses a band
     about `band` times the body's size s = √(w h) wide times its faint share f, and a band lost on one side
     moves the centroid by half its width the other way: ½ band_x s (f_right - f_left) along x, ½ band_y s
     (f_bottom - f_top) along y; 0 along an axis not `corrected`. mask: the outline (h, w), for its extent.
-    still: the cameras still (cfg.band_still; else cfg.band)."""
+    still: the cameras still (cfg.band_still; else cfg.band). upright: the body is a person; with the
+    cameras still, one that is not loses a band of fixed width along x, cfg.ball_band_still_px (a ball's
+    faint side loses its outer pixel or so whatever its size; a person's, a share of a limb)."""
     _, _, bw, bh = cv2.boundingRect(mask.view(np.uint8))
     size = float(np.sqrt(bw * bh))
     left, right, top, bottom = shares
     band = cfg.band_still if still else cfg.band
-    return (0.5 * band[0] * (right - left) * size if corrected[0] else 0.0,
+    band_x = cfg.ball_band_still_px if still and not upright else band[0] * size
+    return (0.5 * band_x * (right - left) if corrected[0] else 0.0,
             0.5 * band[1] * (bottom - top) * size if corrected[1] else 0.0)
