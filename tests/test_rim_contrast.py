@@ -84,15 +84,15 @@ def test_a_faint_sides_lost_band_is_undone_towards_it() -> None:
     assert seen[0] < true[0] - 0.1  # the shaded right rim is lost: the centroid lies left of the ball's
     shares = faint_shares(mask, box, frame, wall, 1.0, CFG)
     assert shares[1] > shares[0] + 0.3
-    sx, sy = rim_shift_px(shares, mask, CFG)
+    sx, sy = rim_shift_px(shares, mask, CFG, still=True)  # the learnt background's shares: cameras still
     assert sx > 0.0  # towards the faint side
     assert abs(seen[0] + sx - true[0]) < abs(seen[0] - true[0])
     assert abs(sy) < 0.5 * sx  # top and bottom alike: no move along y to speak of
-    assert rim_shift_px(shares, mask, CFG, (False, True))[0] == 0.0  # a vehicle's flat face: not undone
+    assert rim_shift_px(shares, mask, CFG, (False, True), still=True)[0] == 0.0  # a vehicle's flat face: not undone
     # undone, the side's 1-σ is the spread left; not undone, the full one
     assert rim_sigma_px(shares, CFG, (True, True))[0] < rim_sigma_px(shares, CFG)[0]
     # both sides as faint: nothing to undo
-    assert rim_shift_px((0.5, 0.5, 0.2, 0.2), mask, CFG) == (0.0, 0.0)
+    assert rim_shift_px((0.5, 0.5, 0.2, 0.2), mask, CFG, still=True) == (0.0, 0.0)
 
 
 def test_a_still_balls_faint_side_loses_a_band_of_fixed_width_a_persons_a_share_of_its_size() -> None:
@@ -102,8 +102,14 @@ def test_a_still_balls_faint_side_loses_a_band_of_fixed_width_a_persons_a_share_
         assert rim_shift_px(shares, mask, CFG, still=True)[0] == pytest.approx(0.5 * CFG.ball_band_still_px)
     person = [rim_shift_px(shares, m, CFG, still=True, upright=True)[0] for m in (small, large)]
     assert person[1] == pytest.approx(6.0 * person[0]) and person[0] == pytest.approx(0.5 * CFG.band_still[0] * 20)
-    # the cameras moving: a share of the size for every body
-    assert rim_shift_px(shares, large, CFG)[0] == pytest.approx(0.5 * CFG.band[0] * 120)
+    # the cameras moving (the stereo residual's shares): a share of the size, along y alone
+    assert rim_shift_px(shares, large, CFG) == (0.0, 0.0)
+    assert rim_shift_px((0.0, 0.0, 0.0, 1.0), large, CFG)[1] == pytest.approx(0.5 * CFG.band[1] * 120)
+    # and the spread left after it along y is the moving one's, x's the full side's
+    bottom = (0.0, 0.0, 0.0, 1.0)
+    assert rim_sigma_px(bottom, CFG, (True, True), moving=True)[1] == pytest.approx(CFG.corrected_side_moving_px[1] / 2)
+    assert rim_sigma_px(bottom, CFG, (True, True))[1] == pytest.approx(CFG.corrected_side_px[1] / 2)
+    assert rim_sigma_px(shares, CFG, (True, True), moving=True)[0] == pytest.approx(CFG.side_px / 2)
 
 
 def test_the_localiser_takes_the_rims_sigma_in_place_of_the_fixed_one() -> None:

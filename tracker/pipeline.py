@@ -281,7 +281,7 @@ class Pipeline:
             gain = self.temporal.gain or b.gain
             shares = faint_shares(b.mask, b.box, frame.left, model[0], gain, self.rim_contrast)
         corrected = (not wide, not (wide or person))  # a curved rim's band (rim_contrast.rim_shift_px)
-        return (rim_sigma_px(shares, self.rim_contrast, corrected),
+        return (rim_sigma_px(shares, self.rim_contrast, corrected, model is None),
                 rim_shift_px(shares, b.mask, self.rim_contrast, corrected, model is not None, person))
 
     def between_frames(self, deadline: float) -> None:
