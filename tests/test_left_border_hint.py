@@ -134,3 +134,24 @@ def test_a_piece_under_a_tenth_of_the_car_is_joined_to_it(monkeypatch: pytest.Mo
     monkeypatch.setattr(temporal, "_without_rims", lambda blobs: [b for b in blobs if not any(
         o is not b and temporal._overlap(o.box, b.box) and b.area < o.area // 10 for o in blobs)])
     assert all(len(f) == 1 and f[0][0] > 5.0 for f in _car_centroid_errors(range(185, 188)))
+
+
+def _walker_leaving(frames: range) -> list[list[tuple[int, float]]]:
+    """endless:body (a walker leaving at the left border, its mask there in several regions): per frame of
+    `frames`, each detection on it as (its track id, its centroid's distance from the true one in px)."""
+    out = []
+    for _, truth, on in _run("endless:body", frames):
+        tt = truth.target(1)
+        assert tt is not None and tt.centroid_left is not None
+        out.append([(d.track_id, float(np.hypot(*(d.blob.centroid_raw - tt.centroid_left)))) for d in on])
+    return out
+
+
+def test_a_walker_at_the_left_border_in_pieces_is_verified_whole(monkeypatch: pytest.MonkeyPatch) -> None:
+    # frame 484: the largest of the walker's regions (x 0-37) fails at its track's disparity; every region
+    # at once is verified, and the walker keeps its track and its centroid
+    before, at = _walker_leaving(range(483, 485))
+    assert len(before) == 1 and len(at) == 1 and at[0][0] == before[0][0] and at[0][1] < 5.0
+    monkeypatch.setattr(verify.Verifier, "_every_region_at_border", lambda self, *a: (None, a[3][1]))
+    before, at = _walker_leaving(range(483, 485))
+    assert len(at) == 1 and (at[0][0] != before[0][0] or at[0][1] > 20.0)
