@@ -166,6 +166,32 @@ def occluded_gap(a: Blob, b: Blob, bg_disparity: Callable[[Box], tuple[F32, Bool
     return int(np.count_nonzero(hidden & valid)) >= OCCLUDER_SHARE * n
 
 
+_TOUCH = np.ones((5, 5), np.uint8)  # within 2 px of the nearer background
+
+
+def hidden_between(body: BoolA, d: float, region: BoolA, bg: tuple[F32, BoolA], min_gap: float,
+                   gap_px: float) -> bool:
+    """Whether `region` may be a part of `body` (a verified object's mask at disparity d, px; both over one
+    box) that a nearer background hides the rest between them from: a walker's leg beside a box that hides
+    the rest of its legs and the bottom of its torso (endless:body, frames 273-277, 301-304, 454-462). Both
+    lie within 2 px of background nearer than d by the depth-gap test (bg: the map's disparity and where
+    it is known over the box, d_bg >= d (1 + min_gap) + gap_px), the region's rows lie between the body's
+    top and twice its seen height h below its bottom (a walker seen down to its waist: its legs' 71 rows
+    below 66 seen, frame 274), and its columns within h / 2 of the body's."""
+    disp, valid = bg
+    near = (valid & (disp >= np.float32(d * (1.0 + min_gap) + gap_px))).view(np.uint8)
+    rows, cols = np.flatnonzero(body.any(axis=1)), np.flatnonzero(body.any(axis=0))
+    r_rows, r_cols = np.flatnonzero(region.any(axis=1)), np.flatnonzero(region.any(axis=0))
+    if rows.size == 0 or r_rows.size == 0 or not near.any():
+        return False
+    h = int(rows[-1] - rows[0] + 1)
+    if r_rows[0] < rows[0] or r_rows[-1] > rows[-1] + 2 * h or r_cols[-1] < cols[0] - h // 2 \
+            or r_cols[0] > cols[-1] + h // 2:
+        return False
+    around = cv2.dilate(near, _TOUCH) > 0
+    return bool((around & body).any() and (around & region).any())
+
+
 def join(a: Blob, b: Blob, area_moments: NDArray[np.float64], lead: Blob | None = None) -> Blob:
     """Two blobs as one: masks painted into the union of their boxes, eq. (10) over the union (raw, and
     rectified with each pixel's area from area_moments (H, W, 3) [a x, a y, a]), the disparity, match and
