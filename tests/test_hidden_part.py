@@ -67,3 +67,13 @@ def test_a_walkers_leg_beside_a_nearer_box_joins_its_upper_body(monkeypatch: pyt
     monkeypatch.setattr(verify, "hidden_between", lambda *a: False)
     errors = _walker_errors(274)
     assert len(errors) == 1 and errors[0] > 15.0
+
+
+def test_a_walker_beside_a_box_its_track_predicted_about_keeps_its_legs(monkeypatch: pytest.MonkeyPatch) -> None:
+    # frame 464: the walker's region beside the box, its track's predicted centroid in a gap of it, the map
+    # nearer than the walker there (the box's disparity carried leftwards); refused as a new region, the
+    # upper part alone was kept, 38 px above the truth's centroid
+    errors = _walker_errors(464)
+    assert len(errors) == 1 and errors[0] < 10.0
+    monkeypatch.setattr(verify, "_AROUND_PX", 0.0)
+    assert all(e > 30.0 for e in _walker_errors(464))

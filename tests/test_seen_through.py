@@ -30,11 +30,14 @@ def _map(behind: float, around: float) -> tuple[CorrespondenceMap, np.ndarray]:
 def test_a_tracked_object_before_a_map_nearer_than_itself_is_judged_by_the_farthest_background_about_it() -> None:
     verifier = Pipeline(default_rig()).verifier
     cm, obj = _map(29.5, 7.4)
-    assert verifier._seen_through(cm, obj, 25.0, 29.5, 25.0) == pytest.approx(7.4)  # tracked: the hedge's
-    assert verifier._seen_through(cm, obj, 25.0, 29.5, None) is None  # a new region: no
-    assert verifier._seen_through(cm, obj, 25.0, 25.6, 25.0) is None  # the map not clearly nearer: no
+    assert verifier._seen_through(cm, obj, 25.0, 29.5, 25.0, []) == pytest.approx(7.4)  # tracked: the hedge's
+    assert verifier._seen_through(cm, obj, 25.0, 29.5, None, []) is None  # a new region: no
+    assert verifier._seen_through(cm, obj, 25.0, 25.6, 25.0, []) is None  # the map not clearly nearer: no
+    # no track predicted on it, but one about it at its disparity: a tracked object's; at another, not
+    assert verifier._seen_through(cm, obj, 25.0, 29.5, None, [25.4]) == pytest.approx(7.4)
+    assert verifier._seen_through(cm, obj, 25.0, 29.5, None, [27.0]) is None
     cm, obj = _map(29.5, 29.5)  # nothing known beyond the post's: the 10th percentile is the post's
-    assert verifier._seen_through(cm, obj, 25.0, 29.5, 25.0) == pytest.approx(29.5)
+    assert verifier._seen_through(cm, obj, 25.0, 29.5, 25.0, []) == pytest.approx(29.5)
 
 
 def test_a_walker_beside_a_post_keeps_its_legs() -> None:

@@ -64,6 +64,7 @@ _ONE = OneCameraConfig()  # its depth_tol_px and cover_px: what a nearer backgro
 
 
 _REACH_PX = 4  # a track's predicted centroid in a gap of the key mask's region (an arm's, a crack) still names it
+_AROUND_PX = 1.0  # a track predicted within a region's rectangle this near its match (px) names it (_seen_through)
 
 
 def _part_of(found: list[Blob], region: BoolA, area: int, min_part_px: int) -> Blob | None:
@@ -279,7 +280,7 @@ class Verifier:
         gap, gap_px = cfg.min_depth_gap, cfg.min_disparity_gap_px
         behind = median_behind(cm, obj)
         if not (in_front(fine.disparity, d_bg, gap, gap_px) or in_front(fine.disparity, behind, gap, gap_px)):
-            far = self._seen_through(cm, obj, fine.disparity, min(d_bg, behind), d_hint)
+            far = self._seen_through(cm, obj, fine.disparity, min(d_bg, behind), d_hint, around)
             if far is None or not in_front(fine.disparity, far, gap, gap_px):
                 return None  # not in front of the background: a misregistered background patch
             d_bg = far
@@ -288,19 +289,24 @@ class Verifier:
         return Blob(box, obj, area, c_raw, np.array([sx / sa, sy / sa]), fine.disparity, fine.sigma, d_bg,
                     fine.score, gain), changed
 
-    def _seen_through(self, cm: CorrespondenceMap, obj: BoolA, d: float, d_bg: float, d_hint: float | None
-                      ) -> float | None:
+    def _seen_through(self, cm: CorrespondenceMap, obj: BoolA, d: float, d_bg: float, d_hint: float | None,
+                      around: list[float]) -> float | None:
         """The background's disparity about a tracked object (d_hint: its track's prediction) where the map
         puts the background behind it nearer than the object itself, by the depth-gap test the other way
         (d_bg in front of d): the object is seen there by both cameras, so nothing nearer stands before it
         and the map is wrong (semi-global matching carries a post's disparity into the band left of it the
         right camera cannot see). Then the farthest known background about it: the 10th percentile of the
-        map's disparity over the box's known pixels outside the object. None otherwise."""
+        map's disparity over the box's known pixels outside the object. None otherwise. A region no track
+        is predicted on is a tracked object's too where one is predicted about it (`around`: within its
+        bounding rectangle) within _AROUND_PX of its match: endless:body frame 464, a walker beside a box
+        whose predicted centroid fell in a gap of its region; refused there, its upper part alone was kept,
+        38 px above the truth's centroid."""
         gap, gap_px = self.cfg.min_depth_gap, self.cfg.min_disparity_gap_px
-        if d_hint is None or not in_front(d_bg, d, gap, gap_px):
+        tracked = d_hint is not None or any(abs(h - d) < _AROUND_PX for h in around)
+        if not tracked or not in_front(d_bg, d, gap, gap_px):
             return None
-        around = cm.disparity[~obj & cm.valid]
-        return float(np.percentile(around, 10)) if around.size else None
+        beyond = cm.disparity[~obj & cm.valid]
+        return float(np.percentile(beyond, 10)) if beyond.size else None
 
     def _tracked_outline(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap, model: tuple[F32, F32],
                          m_left: BoolA, d_hint: float, free: BoolA, around: list[float], found: list[Blob] | None
