@@ -32,7 +32,10 @@ def test_a_tracked_object_before_a_map_nearer_than_itself_is_judged_by_the_farth
     cm, obj = _map(29.5, 7.4)
     assert verifier._seen_through(cm, obj, 25.0, 29.5, 25.0, []) == pytest.approx(7.4)  # tracked: the hedge's
     assert verifier._seen_through(cm, obj, 25.0, 29.5, None, []) is None  # a new region: no
-    assert verifier._seen_through(cm, obj, 25.0, 25.6, 25.0, []) is None  # the map not clearly nearer: no
+    assert verifier._seen_through(cm, obj, 25.0, 25.4, 25.0, []) is None  # the map not clearly nearer: no
+    # nearer by 1.3 px: clearly (min_disparity_gap_px, 0.5 px), though within the depth-gap
+    # test with its relative part (4 %: 1.5 px here)
+    assert verifier._seen_through(cm, obj, 25.0, 26.3, 25.0, []) == pytest.approx(7.4)
     # no track predicted on it, but one about it at its disparity: a tracked object's; at another, not
     assert verifier._seen_through(cm, obj, 25.0, 29.5, None, [25.4]) == pytest.approx(7.4)
     assert verifier._seen_through(cm, obj, 25.0, 29.5, None, [27.0]) is None
