@@ -300,7 +300,7 @@ class Verifier:
         depth-gap test turned round (d_bg >= d (1 + min_depth_gap) + gap_px) left a walker beside a box
         matched at 27.5 px before a map of 29.1 px refused (endless:body frame 465, 4.2° off; against it,
         `tmeye eval --all`: endless:body's elevation RMSE against the seen surface 0.396 -> 0.339°,
-        occlusion:body's azimuth 0.187 -> 0.182°, every other figure within 0.0001). A region no track
+        occlusion:body's azimuth 0.187 -> 0.182°, the other angles within 0.0003°). A region no track
         is predicted on is a tracked object's too where one is predicted about it (`around`: within its
         bounding rectangle) within _AROUND_PX of its match: endless:body frame 464, a walker beside a box
         whose predicted centroid fell in a gap of its region; refused there, its upper part alone was kept,
