@@ -6,11 +6,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from sim_helpers import run_frames
 
 import tracker.verify as verify
-from tracker.evaluation import survey_poses, target_prior
-from tracker.pipeline import Pipeline
-from tracker.sim.scenarios import SimRig, get_scenario
+from tracker.evaluation import _on
 from tracker.split import hidden_between
 
 D = 25.0  # the body's disparity (px)
@@ -45,18 +44,11 @@ def test_a_leg_beside_the_box_that_hides_the_rest_is_a_hidden_part() -> None:
 
 def _walker_errors(frame: int) -> list[float]:
     """endless:body run to `frame`: the centroid errors (px) of the detections mostly on the walker there."""
-    scenario = get_scenario("endless:body")
-    sim = SimRig(scenario)
-    pipe = Pipeline(sim.rig, solid=target_prior(scenario))
-    for g in survey_poses(scenario):
-        pipe.learn_background(sim.background(g))
-    for _ in range(frame + 1):
-        sf = sim.step()
-        res = pipe.step(sf.frame)
-    tt, ids = sf.truth.target(1), sf.truth.ids_left
+    _, sf, res = run_frames("endless:body", frame + 1)
+    tt = sf.truth.target(1)
     assert tt is not None and tt.centroid_left is not None
     return [float(np.hypot(*(d.blob.centroid_raw - tt.centroid_left))) for d in res.detections
-            if np.mean(ids[d.blob.box[1]:d.blob.box[3], d.blob.box[0]:d.blob.box[2]][d.blob.mask] == 1) > 0.5]
+            if _on(d, tt, sf.truth.ids_left)]
 
 
 def test_a_walkers_leg_beside_a_nearer_box_joins_its_upper_body(monkeypatch: pytest.MonkeyPatch) -> None:

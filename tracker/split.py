@@ -43,6 +43,12 @@ MIN_GAP_PX = 2.0
 MIN_GAP_REL = 0.2
 
 
+def rival_gap(d: float) -> float:
+    """The least disparity difference (px) that tells two surfaces about disparity d apart: max(MIN_GAP_PX,
+    MIN_GAP_REL d)."""
+    return max(MIN_GAP_PX, MIN_GAP_REL * d)
+
+
 def right_at(rect: Rectifier, frame: StereoFrame, box: Box, d: float) -> F32:
     """The right image sampled where each left pixel of `box` would be seen at disparity d (px): the raw
     right position of the rectified point (x_rect - d, y_rect), bilinear; (y1 - y0, x1 - x0) float32."""
@@ -68,7 +74,7 @@ def own_pixels(rect: Rectifier, frame: StereoFrame, box: Box, obj: BoolA, d: flo
     kept as its largest region, holes filled (where the two match alike, as on a surface without texture,
     the region keeps them). The outline is returned whole when there is no such rival, or when fewer than
     min_area pixels would be left."""
-    rivals = [o for o in others if abs(o - d) >= max(MIN_GAP_PX, MIN_GAP_REL * d)]
+    rivals = [o for o in others if abs(o - d) >= rival_gap(d)]
     if not rivals:
         return obj
     own = match_cost(rect, frame, box, d)
@@ -106,7 +112,7 @@ def same_body(a: BoolA, d_a: float, b: BoolA, d_b: float) -> bool:
     the smaller one under 1/PART_INSIDE_SHARE of the other's pixels with its middle column within the
     other's columns, within s rows of the other's rows; h the rows the taller of the two spans, whichever
     was found first (a head verified before its body is as much a part of it as after)."""
-    if abs(d_a - d_b) >= max(MIN_GAP_PX, MIN_GAP_REL * max(d_a, d_b)):
+    if abs(d_a - d_b) >= rival_gap(max(d_a, d_b)):
         return False
     rows, rows_b = np.flatnonzero(a.any(axis=1)), np.flatnonzero(b.any(axis=1))
     if rows.size == 0 or rows_b.size == 0:
@@ -146,7 +152,7 @@ def occluded_gap(a: Blob, b: Blob, bg_disparity: Callable[[Box], tuple[F32, Bool
     the body (d_bg > d (1 + min_gap) + 0.5 px, the verifier's test turned round) or in that nearer
     background's shadow (tracker.visibility.right_shadow)."""
     d = max(a.disparity, b.disparity)
-    if abs(a.disparity - b.disparity) >= max(MIN_GAP_PX, MIN_GAP_REL * d):
+    if abs(a.disparity - b.disparity) >= rival_gap(d):
         return False
     ax1 = a.box[0] + int(np.flatnonzero(a.mask.any(axis=0))[-1]) + 1  # first column right of a
     bx0 = b.box[0] + int(np.flatnonzero(b.mask.any(axis=0))[0])

@@ -46,7 +46,7 @@ from tracker.regions import (
 )
 from tracker.results import Blob, PartFit
 from tracker.rim import DEFAULT_RIM, RimConfig, RimRecovery
-from tracker.split import MIN_GAP_PX, MIN_GAP_REL, hidden_between, join, own_pixels, same_body
+from tracker.split import hidden_between, join, own_pixels, rival_gap, same_body
 from tracker.stereo import RegionMatch
 from tracker.strips import MATCH_HALF, MIN_SCORE, Strips, first_window, whole_outline
 from tracker.visibility import with_objects
@@ -221,7 +221,7 @@ class Verifier:
                                                   cfg.min_depth_gap, cfg.min_disparity_gap_px):
                 continue
             got = self._verify_region(frame, box, cm, region, f.disparity, free, around, found)
-            if got is not None and abs(got[0].disparity - f.disparity) < max(MIN_GAP_PX, MIN_GAP_REL * f.disparity):
+            if got is not None and abs(got[0].disparity - f.disparity) < rival_gap(f.disparity):
                 return got, k
         return None, None
 
