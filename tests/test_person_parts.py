@@ -1,6 +1,7 @@
-"""A person's parts are matched on the pixels of its outline that changed (tracker.verify.Verifier.part_fits):
-the outline is filled, so the background seen between a walker's legs and under its arms is in it, and a
-part holding that background matches between the body's depth and the background's."""
+"""A person's parts are matched on the pixels of its outline that changed
+(tracker.region_match.RegionMatcher.part_fits): the outline is filled, so the background seen between a
+walker's legs and under its arms is in it, and a part holding that background matches between the body's
+depth and the background's."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-import tracker.verify as verify
+import tracker.region_match as region_match
 from tracker.pipeline import Pipeline
 from tracker.results import Blob, PartFit
 from tracker.sim.scenarios import SimRig, get_scenario
@@ -51,9 +52,9 @@ def test_the_background_a_persons_outline_encloses_is_left_out_of_its_parts(monk
         cores.append(core.copy())
         return [PartFit(d, 0.01, 10)]
 
-    monkeypatch.setattr(verify, "part_fits", fits)
+    monkeypatch.setattr(region_match, "part_fits", fits)
     pipe.verifier.part_fits(frame, _blob(outline))  # type: ignore[arg-type]
-    strips = pipe.verifier._strips(frame, BOX, outline, 12.0, verify.first_window(outline))  # type: ignore[arg-type]
+    strips = pipe.verifier._strips(frame, BOX, outline, 12.0, region_match.first_window(outline))  # type: ignore[arg-type]
     assert strips is not None and len(cores) == 1
     assert np.array_equal(cores[0], strips.core(legs)) and cores[0].sum() < strips.core(outline).sum()
 

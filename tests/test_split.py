@@ -5,6 +5,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 import pytest
+from sim_helpers import box_blob
 
 from tracker.frames import StereoFrame
 from tracker.geometry import Camera, StereoRig
@@ -148,8 +149,9 @@ def test_a_new_region_that_matches_nowhere_whole_is_searched_by_thirds(monkeypat
 def test_a_slanted_near_face_is_matched_on_a_narrower_window(monkeypatch: pytest.MonkeyPatch) -> None:
     # a face whose disparity grows 0.12 px per column (a slant: 5.8 px across a 48 px window) matches
     # nowhere at one disparity on the 48 x 32 window; on the 24 x 16 one it does, near its centre's 60 px
-    from tracker import verify
+    from tracker import region_match, verify
     from tracker.detect import DetectorConfig
+    from tracker.strips import MATCH_HALF
 
     tex = _texture(4)
     yy, xx = np.mgrid[0:H, 0:W].astype(np.float32)
@@ -167,15 +169,12 @@ def test_a_slanted_near_face_is_matched_on_a_narrower_window(monkeypatch: pytest
     obj = np.ones((120, 120), bool)
     fit = v.match_object(frame, box, obj, 60.0)
     assert fit is not None and abs(fit.disparity - 60.0) < 1.5
-    monkeypatch.setattr(verify, "_MATCH_HALF_SLANT", verify.MATCH_HALF)
+    monkeypatch.setattr(region_match, "_MATCH_HALF_SLANT", MATCH_HALF)
     assert v.match_object(frame, box, obj, 60.0) is None
 
 
 def _blob(box: tuple[int, int, int, int], d: float) -> Blob:
-    x0, y0, x1, y1 = box
-    mask = np.ones((y1 - y0, x1 - x0), bool)
-    c = np.array([(x0 + x1 - 1) / 2, (y0 + y1 - 1) / 2])
-    return Blob(box, mask, mask.size, c, c.copy(), d, 0.05, 4.0, 0.95)
+    return box_blob(box, d, 4.0)
 
 
 def test_one_body_seen_on_both_sides_of_a_nearer_post_is_joined() -> None:

@@ -84,7 +84,7 @@ class DetectorConfig:
     object must then cover about moving_min_cells · stride² pixels to be picked up). near_m: the nearest
     range (m) of the background: it bounds the background's disparity search to f·b / near_m.
     max_speed_mps: the fastest a tracked object's range changes (m/s): it bounds the search about the
-    track's predicted disparity (tracker.verify.Verifier.search_radius)."""
+    track's predicted disparity (tracker.region_match.RegionMatcher.search_radius)."""
 
     epsilon: int = 12
     stride: int = 4

@@ -150,7 +150,7 @@ def part_fits(left: U8, right: U8, core: NDArray[np.generic], off: int, d: float
     robust: the pixels the model does not fit at d, over the whole window (tracker.stereo.residual_outliers),
     are left out of every part, as the region's robust fit leaves them out of its own (tracker.stereo.
     outliers), so that the parts' scatter measures that fit's error. Not for a person's whole outline
-    (Verifier.part_fits): its parts are the seen surface's own, limbs at their own depths included, and
+    (RegionMatcher.part_fits): its parts are the seen surface's own, limbs at their own depths included, and
     their mean is its disparity (surface_mean); left out there, the walkers' range RMSE went 0.072 -> 0.083 m
     on walk:body (`tmeye eval --all`, 2026-12-03)."""
     h, n = core.shape

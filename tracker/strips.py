@@ -155,7 +155,7 @@ def whole_match(left: U8, right: U8, whole: U8, off: int, d: float) -> RegionMat
     lower the score, but they carry the region's edges, which a far head's smooth inside lacks
     (endless:body frame 874: the core of 27 px best at 9 px, the whole region of 101 px best at 6 px,
     0.70, the truth 6.57 px). The span is wider than a far track's search radius (1 px at 27 m,
-    Verifier.search_radius): a track that took a wrong disparity is 2 px off (8.7 px there) and must be
+    RegionMatcher.search_radius): a track that took a wrong disparity is 2 px off (8.7 px there) and must be
     able to come back; the margin keeps out the hedge's or a post's second peak that radius guards against."""
     return _peak_match(left, right, whole, off, *_whole_scores(left, right, whole, off, d))
 

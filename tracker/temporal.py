@@ -277,7 +277,7 @@ class TemporalDetector:
 
     def _match(self, frame: StereoFrame, box: Box, obj: BoolA, d0: float | None, radius: int, tracked: bool
                ) -> RegionMatch | None:
-        """Verifier.match_object on the region's pixels the right camera sees at d0 (Verifier.seen_by_right;
+        """RegionMatcher.match_object on the region's pixels the right camera sees at d0 (its seen_by_right;
         all of them without a d0, or where that match fails), as the stereo stage matches a tracked object: a
         board beside a nearer box the right camera sees in front of its right side (endless:plate, frames
         240-251), matched with those columns too, was 1.4 px too near (0.5 m at 7.7 m) against 0.1 px."""

@@ -18,13 +18,11 @@ from numpy.typing import NDArray
 
 from tracker.bgdepth import CorrespondenceMap
 from tracker.detect import Box, StereoSubtractor
-from tracker.disparity_sigma import part_fits
 from tracker.frames import StereoFrame
 from tracker.growth import grow_tracked
 from tracker.masks import (
     NEAR,
     changed_holes_filled,
-    changed_part,
     found_pixels,
     key_mask,
     largest_component,
@@ -33,8 +31,8 @@ from tracker.masks import (
     temporal_outline,
     with_head,
 )
-from tracker.one_camera import OneCameraConfig, seen_by_right
 from tracker.rectify import Rectifier
+from tracker.region_match import RegionMatcher
 from tracker.regions import (
     background_disparity,
     hints_around,
@@ -42,14 +40,10 @@ from tracker.regions import (
     mask_centroid,
     median_behind,
     nearest_hint,
-    row_thirds,
 )
-from tracker.results import Blob, PartFit
+from tracker.results import Blob
 from tracker.rim import DEFAULT_RIM, RimConfig, RimRecovery
 from tracker.split import hidden_between, join, own_pixels, rival_gap, same_body
-from tracker.stereo import RegionMatch
-from tracker.strips import MATCH_HALF, MIN_SCORE, Strips, first_window, whole_outline
-from tracker.visibility import with_objects
 
 U8 = NDArray[np.uint8]
 F64 = NDArray[np.float64]
@@ -57,10 +51,7 @@ F32 = NDArray[np.float32]
 BoolA = NDArray[np.bool_]
 
 
-_MATCH_HALF_SLANT = (12, 8)  # the same when the larger ones match nowhere (slanted faces, near)
 _PART_TRIES = 2  # regions of a box verified as parts of a body found before (tracker.split.same_body)
-_SEARCH_RADIUS = 4  # px about a disparity that refining from failed to match (Verifier.search_radius)
-_ONE = OneCameraConfig()  # its depth_tol_px and cover_px: what a nearer background hides from the right camera
 
 
 _REACH_PX = 4  # a track's predicted centroid in a gap of the key mask's region (an arm's, a crack) still names it
@@ -111,15 +102,14 @@ def _border_hints(hints: F64 | None, region: BoolA, box: Box) -> list[float]:
     return [d for _, d in near]
 
 
-class Verifier:
-    """Turns candidate boxes into verified Blobs (or nothing)."""
+class Verifier(RegionMatcher):
+    """Turns candidate boxes into verified Blobs (or nothing); its regions' disparities are matched as
+    tracker.region_match does."""
 
     def __init__(self, sub: StereoSubtractor, rect: Rectifier, rim: RimConfig | None = DEFAULT_RIM):
         """rim: how the outline's rim is recovered by stereo, the cameras still or moving (None: it is
         not)."""
-        self.sub = sub
-        self.rect = rect
-        self.cfg = sub.cfg
+        super().__init__(sub, rect)
         self.rim = None if rim is None else RimRecovery(rim, rect, sub.cfg.epsilon)
 
     def verify_all(self, frame: StereoFrame, box: Box, hints: F64 | None = None, max_objects: int = 3,
@@ -336,20 +326,6 @@ class Verifier:
             wide = own_pixels(self.rect, frame, box, wide, d_hint, around, self.cfg.min_area_px)
         return wide, matched, gain, changed
 
-    def seen_by_right(self, frame: StereoFrame, box: Box, region: BoolA, d: float, found: list[Blob] | None = None
-                      ) -> BoolA:
-        """one_camera.seen_by_right: the region less what a nearer background hides from the right camera,
-        and the objects found before it this frame (`found`; a nearer one hides it as the background does:
-        two-targets:body, frames 142-165, a ball at 5 m covered a walker's arm at 12 m in the right image,
-        and the walker's range was 0.2 to 0.6 m off)."""
-        ext = (box[0], box[1], min(box[2] + self.sub.bg.num_disparities, frame.left.shape[1]), box[3])
-        cm = self.sub.correspondence(0, frame.gimbal, ext)
-        if found:
-            disp, valid = with_objects(cm.disparity, cm.valid, ext, [(f.box, f.mask, f.disparity) for f in found])
-            if disp is not None and valid is not None:
-                cm = replace(cm, disparity=disp, valid=valid)
-        return seen_by_right(self.rect, box, region, d, cm, ext, _ONE)
-
     def _temporal_outline(self, frame: StereoFrame, box: Box, model: tuple[F32, F32], core: BoolA | None,
                           region: BoolA, found: list[Blob] | None) -> tuple[BoolA, float, BoolA]:
         """masks.temporal_outline of an object inside `region` of the box (core: none, or the pixels both
@@ -359,69 +335,6 @@ class Verifier:
         return temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1], dev[y0:y1, x0:x1],
                                 np.zeros_like(region) if core is None else core, region, self.cfg.epsilon,
                                 found_pixels([f.mask for f in found or []]))
-
-    def search_radius(self, d_hint: float | None) -> int:
-        """How far (px) about a track's predicted disparity d the search goes when refining from it fails:
-        as far as its disparity can move in a frame at max_speed_mps, Δd = d ΔZ / Z = d² v / (f b fps)
-        (Z = f b / d), doubled, between 1 and 4 px; 4 about a new object's coarse disparity. A far target
-        (26 m: d 7 px, Δd 0.1 px) so cannot take a stronger peak 2 to 4 px away (a hedge behind a head)."""
-        if d_hint is None:
-            return _SEARCH_RADIUS
-        step = d_hint * d_hint * self.cfg.max_speed_mps / (self.rect.f * self.rect.b * self.cfg.fps)
-        return int(min(max(np.ceil(2.0 * step), 1), _SEARCH_RADIUS))
-
-    def match_object(self, frame: StereoFrame, box: Box, obj: BoolA, d0: float | None,
-                     radius: int = _SEARCH_RADIUS, tracked: bool = False) -> RegionMatch | None:
-        """The object's disparity from matching its own pixels (a search over the whole range first when
-        no prior d0 is known). None without a match, or with one the image edge may have cut short (the
-        right camera may not see it). A region whose depth varies (a walker's swinging limbs about its
-        centroid) may match nowhere as one surface: then its top, middle and bottom thirds are tried; and a
-        near object's slanted faces, whose disparity changes across the window by several pixels (a face at
-        45° across 48 px at 3 m: about 5 px), match nowhere at one disparity: then windows half as wide.
-        tracked: d0 is a track's prediction (or a body's found this frame), so a small region's whole
-        outline may give the disparity where its core's match disagrees or fails (Strips.match)."""
-        d0 = self._coarse_disparity(frame, box, obj, d0)
-        if d0 is None:
-            return None
-        for half in (first_window(obj), _MATCH_HALF_SLANT):
-            for part in row_thirds(obj):
-                strips = self._strips(frame, box, part, d0, half)
-                fine = None if strips is None else strips.match(part, d0, radius, tracked)
-                if fine is not None and strips is not None:
-                    return None if strips.clipped and fine.disparity > strips.d_hi - 2.0 else fine
-        return None
-
-    def match_part_or_whole(self, frame: StereoFrame, box: Box, part: BoolA | None, whole: BoolA, d0: float | None,
-                            radius: int, tracked: bool) -> RegionMatch | None:
-        """match_object on `part` of a region (the pixels the right camera sees, `seen_by_right`; None: no
-        such part), and where that fails or there is none, on the whole region (the same search not twice)."""
-        fine = None if part is None else self.match_object(frame, box, part, d0, radius, tracked)
-        if fine is None and (part is None or not np.array_equal(part, whole)):
-            fine = self.match_object(frame, box, whole, d0, radius, tracked)
-        return fine
-
-    def part_fits(self, frame: StereoFrame, blob: Blob) -> list[PartFit]:
-        """The disparities (px), 1-σ (px) and pixel counts of the parts of a verified blob (tracker.
-        disparity_sigma.part_fits: the window `match_object` uses first cut into a grid, each part refined
-        from the blob's disparity on the same strips); the parts that do not match are left out. A person's
-        are matched on the pixels of its outline that changed (_changed_part), any other's robustly."""
-        strips = self._strips(frame, blob.box, blob.mask, blob.disparity, first_window(blob.mask))
-        if strips is None:
-            return []
-        whole = whole_outline(blob.mask)
-        seen = self._changed_part(frame, blob) if whole else blob.mask
-        return part_fits(strips.left, strips.right, strips.core(seen), strips.off, blob.disparity, MIN_SCORE,
-                         robust=not whole)
-
-    def _changed_part(self, frame: StereoFrame, blob: Blob) -> BoolA:
-        """masks.changed_part of a person's outline with the cameras still (its temporal background at this
-        pose); the whole outline while they move."""
-        model = self.sub.left_background(frame.gimbal)
-        if model is None:
-            return blob.mask
-        x0, y0, x1, y1 = blob.box
-        return changed_part(blob.mask, frame.left[y0:y1, x0:x1], model[0][y0:y1, x0:x1], blob.gain,
-                            self.cfg.epsilon)
 
     def _outline_stereo(self, frame: StereoFrame, box: Box, m_left: BoolA,
                         d_hint: float | None) -> tuple[BoolA, BoolA, float] | None:
@@ -439,71 +352,3 @@ class Verifier:
         # the rest of the object: where the right key sees it at this disparity, or next to the solid
         near = cv2.dilate(obj.astype(np.uint8), NEAR) > 0
         return obj, m_right | (m_left & near), d_hint
-
-    def _coarse_disparity(self, frame: StereoFrame, box: Box, region: BoolA, d0: float | None) -> float | None:
-        """d0 if known, else the region's disparity from a search over the whole range (None: no match).
-        A new object whose depth varies (a walker's swinging legs) may match nowhere as one surface, as a
-        tracked one may (match_object): then its top, middle and bottom thirds are searched in turn."""
-        if d0 is not None:
-            return d0
-        for part in row_thirds(region):
-            strips = self._strips(frame, box, part, None)
-            coarse = None if strips is None else strips.match(part, None, 0)
-            if coarse is not None:
-                return coarse.disparity
-        return None
-
-    def _strips(self, frame: StereoFrame, box: Box, region: BoolA, d_hint: float | None,
-                half: tuple[int, int] = MATCH_HALF) -> Strips | None:
-        """Rectified left/right strips around a region's rows, wide enough for the disparity search; the
-        window matched is the region's central 2 half[0] x 2 half[1] px at most."""
-        rect, cfg = self.rect, self.cfg
-        x0, y0, x1, y1 = box
-        bx, by, bw, bh = cv2.boundingRect(region.view(np.uint8))
-        if bw * bh < 8:
-            return None
-        # the region's box in rectified coordinates: its corners and edge midpoints (the lens bends edges)
-        gx = np.array([bx, bx + bw // 2, bx + bw - 1] * 3)
-        gy = np.repeat([by, by + bh // 2, by + bh - 1], 3)
-        rc = rect.rect_of_raw[0][y0 + gy, x0 + gx]
-        w, h = rect.rig.left.size
-        rx0, ry0 = int(np.floor(rc[:, 0].min())), max(int(np.floor(rc[:, 1].min())), 0)
-        rx1, ry1 = int(np.ceil(rc[:, 0].max())) + 1, min(int(np.ceil(rc[:, 1].max())) + 1, h)
-        # a large object is matched on a central window only (`half`; a person on its whole outline,
-        # first_window): its disparity is then already far more precise than its range needs (the range
-        # error grows as z², the object shrinks as 1/z)
-        cx, cy = (rx0 + rx1) // 2, (ry0 + ry1) // 2
-        rx0, rx1 = max(rx0, cx - half[0]), min(rx1, cx + half[0])
-        ry0, ry1 = max(ry0, cy - half[1]), min(ry1, cy + half[1])
-        d_hi = cfg.max_disparity if d_hint is None else int(np.ceil(d_hint)) + 8
-        # near the left edge the search range runs out of image: keep at least 8 columns of the region
-        # (its right part) and search as far as the image allows
-        rx0 = max(rx0, min(d_hi + 3, rx1 - 8))
-        clipped = rx0 - 3 < d_hi
-        d_hi = min(d_hi, rx0 - 3)
-        rx1 = min(rx1, w - 2)  # at the right edge, match on the part inside the image
-        if d_hi < 3 or rx1 - rx0 < 4 or ry1 <= ry0:
-            return None
-        sx0 = rx0 - d_hi - 2
-        box_r = (sx0, ry0, rx1 + 2, ry1)
-        return Strips(rect, (x0, y0), (rx0, ry0, rx1, ry1), rect.rectify(frame.left, 0, box_r),
-                       rect.rectify(frame.right, 1, box_r), rx0 - sx0, d_hi, clipped)
-
-    def right_key_at(self, frame: StereoFrame, box: Box, d: float) -> BoolA:
-        """The right-key mask of eq. (9), sampled at the left box's pixels shifted by disparity d."""
-        rect = self.rect
-        x0, y0, x1, y1 = box
-        ur, vr = rect.right_at(box, d)
-        w, h = rect.rig.right.size
-        bx0, by0 = max(int(np.floor(ur.min())) - 1, 0), max(int(np.floor(vr.min())) - 1, 0)
-        bx1, by1 = min(int(np.ceil(ur.max())) + 2, w), min(int(np.ceil(vr.max())) + 2, h)
-        if bx0 >= bx1 or by0 >= by1:
-            return np.zeros((y1 - y0, x1 - x0), bool)
-        rbox = (bx0, by0, bx1, by1)
-        cm = self.sub.correspondence(1, frame.gimbal, rbox)
-        floor = cm.floor
-        m_right = largest_component(key_mask(frame.right[by0:by1, bx0:bx1], frame.left, cm.map_x, cm.map_y,
-                                     cm.valid, self.cfg.epsilon, floor), close=True, every=True).astype(np.float32)
-        sampled = cv2.remap(m_right, (ur - bx0).astype(np.float32), (vr - by0).astype(np.float32),
-                            cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
-        return np.asarray(sampled >= 0.5)
