@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 from tracker.evaluation import target_prior
 from tracker.pipeline import Pipeline
-from tracker.results import FrameResult
+from tracker.results import Blob, FrameResult
 from tracker.sim.scenarios import SimFrame, SimRig, get_scenario
 
 
@@ -19,3 +21,12 @@ def run_frames(name: str, frames: int) -> tuple[Pipeline, SimFrame, FrameResult]
         sf = sim.step()
         res = pipe.step(sf.frame)
     return pipe, sf, res
+
+
+def box_blob(box: tuple[int, int, int, int], d: float, d_bg: float, part_only: bool = False) -> Blob:
+    """A verified blob filling its box (x0, y0, x1, y1) at disparity d before a background at d_bg (px),
+    its centroid the box's centre: a stand-in for the objects the pipeline's joining rules take."""
+    x0, y0, x1, y1 = box
+    mask = np.ones((y1 - y0, x1 - x0), bool)
+    c = np.array([(x0 + x1 - 1) / 2, (y0 + y1 - 1) / 2])
+    return Blob(box, mask, mask.size, c, c.copy(), d, 0.05, d_bg, 0.95, part_only=part_only)

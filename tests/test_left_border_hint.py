@@ -9,6 +9,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from sim_helpers import box_blob
 
 import tracker.pipeline as pipeline
 import tracker.stereo as stereo
@@ -112,10 +113,7 @@ def test_a_piece_at_the_border_not_joined_to_the_rest_is_left_out(monkeypatch: p
 
 
 def _blob(box: tuple[int, int, int, int], part_only: bool = False) -> Blob:
-    x0, y0, x1, y1 = box
-    mask = np.ones((y1 - y0, x1 - x0), bool)
-    c = np.array([(x0 + x1 - 1) / 2, (y0 + y1 - 1) / 2])
-    return Blob(box, mask, mask.size, c, c.copy(), 16.0, 0.05, 8.0, 0.95, part_only=part_only)
+    return box_blob(box, 16.0, 8.0, part_only)
 
 
 def test_a_piece_at_the_border_is_no_rim_of_the_object_beside_it() -> None:

@@ -107,7 +107,8 @@ def test_a_still_balls_faint_side_loses_a_band_of_fixed_width_a_persons_a_share_
     assert rim_shift_px((0.0, 0.0, 0.0, 1.0), large, CFG)[1] == pytest.approx(0.5 * CFG.band[1] * 120)
     # and the spread left after it along y is the moving one's, x's the full side's
     bottom = (0.0, 0.0, 0.0, 1.0)
-    assert rim_sigma_px(bottom, CFG, (True, True), moving=True)[1] == pytest.approx(CFG.corrected_side_moving_px[1] / 2)
+    moving_y = rim_sigma_px(bottom, CFG, (True, True), moving=True)[1]
+    assert moving_y == pytest.approx(CFG.corrected_side_moving_y_px / 2)
     assert rim_sigma_px(bottom, CFG, (True, True))[1] == pytest.approx(CFG.corrected_side_px[1] / 2)
     assert rim_sigma_px(shares, CFG, (True, True), moving=True)[0] == pytest.approx(CFG.side_px / 2)
 

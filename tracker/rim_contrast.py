@@ -90,7 +90,7 @@ turns; the only body whose band the cameras' moving decides: a person keeps the 
 with the rim's recovery as it now is: along y the share of its size that undoes its shaded bottom's band
 is 3.3 % (k = 0.033; the y error against the true silhouette 0.355 px rms undone by neither, 0.212 with
 the 1.7 % it had, 0.141 with 3.3 %), along x none (the fit gave -0.023, 0.208 -> 0.194 px rms: no loss
-to undo; 1.06 % made it 0.223). The y spread left, `corrected_side_moving_px` 0.5 px a side (a Gaussian
+to undo; 1.06 % made it 0.223). The y spread left, `corrected_side_moving_y_px` 0.5 px a side (a Gaussian
 fit of the centroid's y errors alone gave 0.4, its normalised errors' mean square 0.99; 0.5 gave the
 elevation NEES 1.20 in `tmeye eval`, 0.65 left its within 1σ at 0.80). `tmeye eval --all`: manoeuvre:body
 elevation RMSE 0.0202 -> 0.0141°, azimuth 0.0199 -> 0.0201°; elevation within 1σ 0.803 -> 0.660 and NEES
@@ -125,7 +125,8 @@ class RimContrastConfig:
     ball_band_still_px: with the cameras still, the band (px) a wholly faint side of a body neither
     upright nor wide (a ball) loses along x, a fixed width in place of band_still's share of its size;
     corrected_side_px: a side's 1-σ (px, x and y) left where that loss is undone (see the module's
-    docstring), corrected_side_moving_px while the cameras move (along x side_px: nothing is undone)."""
+    docstring), corrected_side_moving_y_px along y while the cameras move (along x nothing is undone then:
+    band's x share is 0, so the side keeps side_px)."""
 
     faint_level: float = 24.0
     side_px: float = 1.7
@@ -133,7 +134,7 @@ class RimContrastConfig:
     band_still: tuple[float, float] = (0.0106, 0.0124)
     ball_band_still_px: float = 0.78
     corrected_side_px: tuple[float, float] = (1.4, 0.9)
-    corrected_side_moving_px: tuple[float, float] = (1.7, 0.5)
+    corrected_side_moving_y_px: float = 0.5
 
 
 def faint_shares(mask: BoolA, box: tuple[int, int, int, int], image: NDArray[np.uint8],
@@ -213,10 +214,11 @@ def rim_sigma_px(shares: tuple[float, float, float, float], cfg: RimContrastConf
                  corrected: tuple[bool, bool] = (False, False), moving: bool = False) -> tuple[float, float]:
     """The centroid's 1-σ (px, x and y) from its outline's four sides, each side's 1-σ times its faint share
     f: √(σ_left² + σ_right²) / 2 along x, the same with top and bottom along y. The side's 1-σ is side_px,
-    or corrected_side_px along an axis whose expected loss `rim_shift_px` undoes (corrected: x, y)."""
-    left = cfg.corrected_side_moving_px if moving else cfg.corrected_side_px
-    sx = left[0] if corrected[0] else cfg.side_px
-    sy = left[1] if corrected[1] else cfg.side_px
+    or corrected_side_px along an axis whose expected loss `rim_shift_px` undoes (corrected: x, y; while the
+    cameras move, along y only, at corrected_side_moving_y_px: cfg.band's x share is 0)."""
+    undone_x = corrected[0] and not (moving and cfg.band[0] == 0.0)
+    sx = cfg.corrected_side_px[0] if undone_x else cfg.side_px
+    sy = (cfg.corrected_side_moving_y_px if moving else cfg.corrected_side_px[1]) if corrected[1] else cfg.side_px
     v = [(sx * shares[0]) ** 2, (sx * shares[1]) ** 2, (sy * shares[2]) ** 2, (sy * shares[3]) ** 2]
     return float(np.sqrt(v[0] + v[1]) / 2.0), float(np.sqrt(v[2] + v[3]) / 2.0)
 
