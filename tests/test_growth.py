@@ -5,12 +5,15 @@ a surface at another depth and a change not connected to the outline stay out.""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from sim_helpers import run_frames
 
 import tracker.verify as verify
-from tracker.growth import grown_by_change, local_corr
+from tracker.bgdepth import CorrespondenceMap
+from tracker.growth import at_own_depth, grown_by_change, local_corr
 
 EPS = 12
 
@@ -79,6 +82,33 @@ def test_a_change_not_connected_to_the_outline_stays_out() -> None:
     assert np.array_equal(out, obj)
 
 
+def test_a_part_over_a_background_at_the_objects_depth_joins_on_the_models_word() -> None:
+    # a walker's legs before a low wall at its own depth: the other camera shows them alike at either
+    # disparity, which alone keeps them out; where the background's map lies at the object's depth they join
+    key, bg, obj = _scene()
+    body = np.zeros_like(obj)
+    body[10:50, 20:40] = True
+    assert np.array_equal(grown_by_change(key, bg, key, key, obj, _changed(key, bg), EPS), obj)
+    out = grown_by_change(key, bg, key, key, obj, _changed(key, bg), EPS, at_depth=np.ones_like(obj))
+    assert np.count_nonzero(out & body) >= 0.95 * np.count_nonzero(body) and not np.any(out & ~body)
+    # where the map lies elsewhere, or the part is the background's texture relit (a shadow), not
+    away = np.zeros_like(obj)
+    away[:, 60:] = True
+    assert np.array_equal(grown_by_change(key, bg, key, key, obj, _changed(key, bg), EPS, at_depth=away), obj)
+    key[30:50, 20:40] = (bg[30:50, 20:40] * 0.55).astype(np.uint8)
+    out = grown_by_change(key, bg, key, key, obj, _changed(key, bg), EPS, at_depth=np.ones_like(obj))
+    assert np.count_nonzero(out[30:50]) <= 0.05 * 20 * 20
+
+
+def test_the_background_at_a_bodys_depth_is_its_map_within_twice_the_depth_gap_test() -> None:
+    disparity = np.array([[7.0, 18.9, 19.2, 20.0, 21.0, 22.2, 23.0]], np.float32)
+    cm = CorrespondenceMap(np.zeros_like(disparity), np.zeros_like(disparity), np.ones(disparity.shape, bool),
+                           disparity, np.zeros(disparity.shape, np.uint8))
+    # d 20.4, twice the test (0.04, 0.5 px): d_bg within (20.4 - 1) / 1.08 = 17.96 and 20.4 x 1.08 + 1 = 23.03
+    assert at_own_depth(cm, 20.4, 0.04, 0.5).tolist() == [[False, True, True, True, True, True, True]]
+    assert not at_own_depth(replace(cm, valid=np.zeros(disparity.shape, bool)), 20.4, 0.04, 0.5).any()
+
+
 def _beyond_a_gap(gap_rows: int, seed: int = 7) -> tuple[np.ndarray, ...]:
     """_scene with the object's lower part 4 + gap_rows rows below its outline (the rows between show the
     background: where the object's grey passed for the background's, the model saw no change) and the other
@@ -118,7 +148,7 @@ def _outline(name: str, frames: int, grow: bool, monkeypatch: pytest.MonkeyPatch
     """A scenario's target's outline in the last of its first frames: (true pixels it holds, true pixels it
     misses, pixels off the target)."""
     if not grow:
-        monkeypatch.setattr(verify, "grow_tracked", lambda rect, frame, box, cm, bg, obj, changed, d, eps: obj)
+        monkeypatch.setattr(verify, "grow_tracked", lambda *a: a[5])
     _, sf, res = run_frames(name, frames)
     truth = sf.truth.ids_left == 1
     (det,) = [d for d in res.detections if d.track_id == res.primary_id]

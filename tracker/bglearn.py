@@ -2,7 +2,7 @@
 
 A real source starts from its first pair as the background (the tracker runs from frame 0), while a
 StreamLearner keeps samples of the stream taken while the cameras are still at the learnt pose: every
-`sample_every`-th pair, divided by the frame's global gain g (tracker.temporal.global_gain) so that a
+`sample_every`-th pair, divided by the frame's global gain g (tracker.masks.global_gain) so that a
 change of light does not enter the statistics, with the pixels of the objects the tracker found marked
 (in the right image at the object's disparity; both grown by a few pixels). Each relearn takes the
 per-pixel median of the last `window` samples of each camera over the samples where the pixel was not an

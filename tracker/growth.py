@@ -18,12 +18,13 @@ BoolA = NDArray[np.bool_]
 
 
 def grow_tracked(rect: Rectifier, frame: StereoFrame, box: Box, cm: CorrespondenceMap, bg: F32, obj: BoolA,
-                 changed: BoolA, d: float, eps: int) -> BoolA:
+                 changed: BoolA, d: float, eps: int, at_depth: BoolA | None = None) -> BoolA:
     """`grown_by_change` of an outline `obj` over the raw-left box at the body's disparity d (px): cm is the
     box's correspondence map (eq. 9's), bg the temporal background B (full image), changed the box's changed
     pixels it may take, eps eq. (9)'s ε. Worked out over the
     candidates' bounding rectangle and 4 px about it only (what joins does so through them; the 7 x 7
-    windows about them)."""
+    windows about them). at_depth: the box's pixels whose background lies at the body's own depth and that
+    changed (grown_by_change's; tracker.verify.Verifier._at_depth; None: no part joins so)."""
     ys, xs = np.nonzero(changed & ~obj)
     if xs.size == 0:
         return obj
@@ -32,12 +33,23 @@ def grow_tracked(rect: Rectifier, frame: StereoFrame, box: Box, cm: Corresponden
     sy0, sy1 = max(int(ys.min()) - m, 0), min(int(ys.max()) + m + 1, h)
     sx0, sx1 = max(int(xs.min()) - m, 0), min(int(xs.max()) + m + 1, w)
     x0, y0, x1, y1 = part = (box[0] + sx0, box[1] + sy0, box[0] + sx1, box[1] + sy1)
-    at_bg = cm.crop((sx0, sy0, sx1, sy1)).warp(frame.right)
     out = obj.copy()
     out[sy0:sy1, sx0:sx1] = grown_by_change(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1],
-                                            rect.right_image_at(frame.right, part, d), at_bg,
-                                            obj[sy0:sy1, sx0:sx1], changed[sy0:sy1, sx0:sx1], eps)
+                                            rect.right_image_at(frame.right, part, d),
+                                            cm.crop((sx0, sy0, sx1, sy1)).warp(frame.right),
+                                            obj[sy0:sy1, sx0:sx1], changed[sy0:sy1, sx0:sx1], eps,
+                                            at_depth=None if at_depth is None else at_depth[sy0:sy1, sx0:sx1])
     return out
+
+
+def at_own_depth(cm: CorrespondenceMap, d: float, gap: float, gap_px: float) -> BoolA:
+    """Where the background's map (cm, over a box) is known and lies at a body's own depth d (px): neither
+    in front of the other by twice the depth-gap test (tracker.regions.in_front, d >= d_bg (1 + gap) +
+    gap_px, both ways round; twice, as tracker.temporal takes an object near its background: d is a
+    track's prediction, 0.8 px off its match at endless:body frame 1333). There eq. (9) and the other
+    camera alike see the body as its background."""
+    d_bg, g, g_px = cm.disparity, 2.0 * gap, 2.0 * gap_px
+    return np.asarray(cm.valid & (d < d_bg * (1.0 + g) + g_px) & (d_bg < d * (1.0 + g) + g_px))
 
 
 def local_corr(key: U8, bg: NDArray[np.float32], win: int = 7) -> NDArray[np.float32]:
@@ -54,7 +66,8 @@ def local_corr(key: U8, bg: NDArray[np.float32], win: int = 7) -> NDArray[np.flo
 
 
 def grown_by_change(key: U8, bg: NDArray[np.float32], other_at_d: U8, other_at_bg: U8, obj: BoolA,
-                    changed: BoolA, eps: int, margin: int = 2, max_corr: float = 0.6) -> BoolA:
+                    changed: BoolA, eps: int, margin: int = 2, max_corr: float = 0.6,
+                    at_depth: BoolA | None = None) -> BoolA:
     """The outline `obj` grown into the changed pixels connected to it that are the object's surface too.
 
     The temporal outline is drawn inside the region eq. (9) marks (with a two-pixel rim): a shadow falls on
@@ -73,12 +86,15 @@ def grown_by_change(key: U8, bg: NDArray[np.float32], other_at_d: U8, other_at_b
     meanwhile) at the object's depth where it stood close before it. Then whole parts of the changed pixels
     join where pixel by pixel the other camera cannot tell the object's depth from the background's but on
     the whole can (`_grown_by_parts`; endless:body, a walker's legs: elevation RMSE against the seen
-    surface approach:body 0.065 -> 0.015 deg, the ball's shaded lower limb)."""
+    surface approach:body 0.065 -> 0.015 deg, the ball's shaded lower limb). Where the background itself
+    lies at the object's depth (`at_depth`, at_own_depth: a walker's legs before a low wall it walks
+    along) no camera tells the two apart, and a part joins on the temporal model's word: most of it at
+    the object's depth as above and over such background (`_grown_by_parts`)."""
     k = key.astype(np.int16)
     r_d = np.abs(k - other_at_d.astype(np.int16))
     r_bg = np.abs(k - other_at_bg.astype(np.int16))
     out = _grown_pixelwise(key, bg, obj, changed & (r_d <= eps) & (r_bg > r_d + margin), max_corr)
-    return _grown_by_parts(key, bg, out, changed, r_d <= eps, r_bg - r_d, margin, max_corr)
+    return _grown_by_parts(key, bg, out, changed, (r_d <= eps, at_depth), r_bg - r_d, margin, max_corr)
 
 
 def _grown_pixelwise(key: U8, bg: NDArray[np.float32], obj: BoolA, own: BoolA, max_corr: float) -> BoolA:
@@ -105,7 +121,7 @@ def _grown_pixelwise(key: U8, bg: NDArray[np.float32], obj: BoolA, own: BoolA, m
     return np.asarray(obj | keep[parts])
 
 
-def _grown_by_parts(key: U8, bg: NDArray[np.float32], obj: BoolA, changed: BoolA, at_d: BoolA,
+def _grown_by_parts(key: U8, bg: NDArray[np.float32], obj: BoolA, changed: BoolA, at: tuple[BoolA, BoolA | None],
                     gap: NDArray[np.int16], margin: int, max_corr: float, min_share: float = 0.5) -> BoolA:
     """`obj` grown by whole parts of the changed pixels next to it that the other camera shows at the object's
     disparity though pixel by pixel it cannot tell that from the background's: a smooth surface seen
@@ -117,7 +133,10 @@ def _grown_by_parts(key: U8, bg: NDArray[np.float32], obj: BoolA, changed: BoolA
     ε), the other camera shows it at the object's disparity better than at the background's on the whole,
     by more than `margin` grey levels a pixel (mean of gap = |Γ - Θ_bg| - |Γ - Θ_d|: uncovered background
     and a shadow on the ground match at the background's as well or better), and its texture is not the
-    background's relit (texture_corr at most max_corr)."""
+    background's relit (texture_corr at most max_corr). at: (at_d, at_depth): at_depth, where the
+    background's map lies at the object's depth (None: nowhere), stands in for the margin where most of
+    the part (min_share) lies over it."""
+    at_d, at_depth = at
     rest = changed & ~obj
     if not rest.any():
         return obj
@@ -128,7 +147,10 @@ def _grown_by_parts(key: U8, bg: NDArray[np.float32], obj: BoolA, changed: BoolA
     cnt = np.maximum(np.bincount(flat, minlength=n), 1)
     share = np.bincount(flat, at_d.ravel().astype(np.float64), n) / cnt
     mean_gap = np.bincount(flat, gap.ravel().astype(np.float64), n) / cnt
-    fit = (share >= min_share) & (mean_gap > margin)
+    told = mean_gap > margin
+    if at_depth is not None:  # or no camera can tell: the background lies at the object's depth
+        told |= np.bincount(flat, at_depth.ravel().astype(np.float64), n) / cnt >= min_share
+    fit = (share >= min_share) & told
     fit[0] = False
     if not fit.any():
         return obj

@@ -151,6 +151,14 @@ def changed_holes_filled(mask: BoolA, changed: BoolA, share: float = 0.25) -> Bo
     return np.asarray(mask | fill[labels])
 
 
+def global_gain(key: U8, bg: NDArray[np.float32]) -> float | None:
+    """g = median of Γ / B over grid cells whose background is not dark (B > 8); None with too few."""
+    ok = bg > 8.0
+    if int(np.count_nonzero(ok)) < 64:
+        return None
+    return float(np.median(key[ok].astype(np.float32) / bg[ok]))
+
+
 def change(key: U8, bg: NDArray[np.float32], g: float) -> NDArray[np.float32]:
     """|Γ - g B|: how far each pixel is from the temporal background at global gain g."""
     return np.asarray(np.abs(key.astype(np.float32) - np.float32(g) * bg), np.float32)

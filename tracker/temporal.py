@@ -36,7 +36,7 @@ from numpy.typing import NDArray
 
 from tracker.detect import Box, StereoSubtractor
 from tracker.frames import StereoFrame
-from tracker.masks import largest_region, temporal_outline
+from tracker.masks import global_gain, largest_region, temporal_outline
 from tracker.one_camera import OneCameraConfig, coast_sigma_px, hidden_from_right, nearest_prediction
 from tracker.rectify import Rectifier
 from tracker.regions import background_disparity, mask_centroid, median_behind, nearest_hint
@@ -69,14 +69,6 @@ class TemporalConfig:
     def __post_init__(self) -> None:
         if not 0.0 <= self.right_seen_share <= 1.0:
             raise ValueError(f"right_seen_share must be in 0..1, got {self.right_seen_share}")
-
-
-def global_gain(key: U8, bg: F32) -> float | None:
-    """g = median of Γ / B over grid cells whose background is not dark (B > 8); None with too few."""
-    ok = bg > 8.0
-    if int(np.count_nonzero(ok)) < 64:
-        return None
-    return float(np.median(key[ok].astype(np.float32) / bg[ok]))
 
 
 def change_mask(key: U8, bg: F32, dev: F32, g: float, eps: int) -> U8:
