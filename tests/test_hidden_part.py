@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from sim_helpers import run_frames
 
+import tracker.boxes as boxes
 import tracker.verify as verify
 from tracker.evaluation import _on
 from tracker.split import hidden_between
@@ -69,3 +70,18 @@ def test_a_walker_beside_a_box_its_track_predicted_about_keeps_its_legs(monkeypa
     assert len(errors) == 1 and errors[0] < 10.0
     monkeypatch.setattr(verify, "_AROUND_PX", 0.0)
     assert all(e > 20.0 for e in _walker_errors(464))  # 29 and 53 px when measured, the walker in two
+
+
+def test_a_walkers_leg_in_a_candidate_box_of_its_own_joins_its_upper_body(monkeypatch: pytest.MonkeyPatch) -> None:
+    # frame 457: the leg beside the box 20 px below the upper body, in a box of its own (tracker.boxes):
+    # verified apart it was refused, the centroid 19 px high; its box now joins the upper body's
+    errors = _walker_errors(457)
+    assert len(errors) == 1 and errors[0] < 3.0  # 0.5 px when measured
+
+    def within_8_px(a: tuple[int, int, int, int], b: tuple[int, int, int, int], gap_px: int = 8) -> bool:
+        ox, oy = min(a[2], b[2]) - max(a[0], b[0]), min(a[3], b[3]) - max(a[1], b[1])
+        return ox >= 0.5 * min(a[2] - a[0], b[2] - b[0]) and -gap_px <= oy <= 0.5 * min(a[3] - a[1], b[3] - b[1])
+
+    monkeypatch.setattr(boxes, "_stacked", within_8_px)
+    errors = _walker_errors(457)
+    assert len(errors) == 1 and errors[0] > 15.0
