@@ -77,11 +77,6 @@ def test_a_walkers_leg_in_a_candidate_box_of_its_own_joins_its_upper_body(monkey
     # verified apart it was refused, the centroid 19 px high; its box now joins the upper body's
     errors = _walker_errors(457)
     assert len(errors) == 1 and errors[0] < 3.0  # 0.3 px when measured
-
-    def within_8_px(a: tuple[int, int, int, int], b: tuple[int, int, int, int], gap_px: int = 8) -> bool:
-        ox, oy = min(a[2], b[2]) - max(a[0], b[0]), min(a[3], b[3]) - max(a[1], b[1])
-        return ox >= 0.5 * min(a[2] - a[0], b[2] - b[0]) and -gap_px <= oy <= 0.5 * min(a[3] - a[1], b[3] - b[1])
-
-    monkeypatch.setattr(boxes, "_stacked", within_8_px)
+    monkeypatch.setattr(boxes, "STACK_GAP_REL", 0.0)  # stacked boxes join within 8 px only, as before
     errors = _walker_errors(457)
     assert len(errors) == 1 and errors[0] > 15.0

@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 Box = tuple[int, int, int, int]  # raw left pixels: x0, y0, x1, y1
+STACK_GAP_REL = 0.4  # stacked boxes join this share of the taller one's height apart (at least gap_px)
 
 
 def _stacked(a: Box, b: Box, gap_px: int = 8) -> bool:
-    """Whether two boxes lie one above the other, overlapping or at most gap_px apart, or 0.4 of the taller
-    one's height where that is more: across most of the narrower one's width, along at most half the
+    """Whether two boxes lie one above the other, overlapping or at most gap_px apart, or STACK_GAP_REL (0.4)
+    of the taller one's height where that is more: across most of the narrower one's width, along at most half the
     shorter one's height. A walker passing behind a box shows its upper body over it and a leg beside it
     20 to 32 px below (endless:body, frames 275, 456 and 457; boxes of 84 and 48-60 px); verified apart,
     the leg was refused as an object of its own and the centroid lay 14 to 19 px above the truth's (1.1, 0.5
@@ -16,7 +17,7 @@ def _stacked(a: Box, b: Box, gap_px: int = 8) -> bool:
     0.306 -> 0.275 deg), 0.4 frame 456 as well (0.0396 and 0.270 deg); every other scenario within 0.001."""
     ox = min(a[2], b[2]) - max(a[0], b[0])
     oy = min(a[3], b[3]) - max(a[1], b[1])
-    gap = max(gap_px, 0.4 * max(a[3] - a[1], b[3] - b[1]))
+    gap = max(gap_px, STACK_GAP_REL * max(a[3] - a[1], b[3] - b[1]))
     return (ox >= 0.5 * min(a[2] - a[0], b[2] - b[0]) and -gap <= oy <= 0.5 * min(a[3] - a[1], b[3] - b[1]))
 
 

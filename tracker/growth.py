@@ -94,7 +94,7 @@ def grown_by_change(key: U8, bg: NDArray[np.float32], other_at_d: U8, other_at_b
     r_d = np.abs(k - other_at_d.astype(np.int16))
     r_bg = np.abs(k - other_at_bg.astype(np.int16))
     out = _grown_pixelwise(key, bg, obj, changed & (r_d <= eps) & (r_bg > r_d + margin), max_corr)
-    return _grown_by_parts(key, bg, out, changed, (r_d <= eps, at_depth), r_bg - r_d, margin, max_corr)
+    return _grown_by_parts(key, bg, out, changed, r_d <= eps, r_bg - r_d, margin, max_corr, at_depth=at_depth)
 
 
 def _grown_pixelwise(key: U8, bg: NDArray[np.float32], obj: BoolA, own: BoolA, max_corr: float) -> BoolA:
@@ -121,8 +121,9 @@ def _grown_pixelwise(key: U8, bg: NDArray[np.float32], obj: BoolA, own: BoolA, m
     return np.asarray(obj | keep[parts])
 
 
-def _grown_by_parts(key: U8, bg: NDArray[np.float32], obj: BoolA, changed: BoolA, at: tuple[BoolA, BoolA | None],
-                    gap: NDArray[np.int16], margin: int, max_corr: float, min_share: float = 0.5) -> BoolA:
+def _grown_by_parts(key: U8, bg: NDArray[np.float32], obj: BoolA, changed: BoolA, at_d: BoolA,
+                    gap: NDArray[np.int16], margin: int, max_corr: float, min_share: float = 0.5,
+                    at_depth: BoolA | None = None) -> BoolA:
     """`obj` grown by whole parts of the changed pixels next to it that the other camera shows at the object's
     disparity though pixel by pixel it cannot tell that from the background's: a smooth surface seen
     against itself a few pixels off (a walker's leg, 12 px wide, over the ground it stands on, whose
@@ -133,10 +134,9 @@ def _grown_by_parts(key: U8, bg: NDArray[np.float32], obj: BoolA, changed: BoolA
     ε), the other camera shows it at the object's disparity better than at the background's on the whole,
     by more than `margin` grey levels a pixel (mean of gap = |Γ - Θ_bg| - |Γ - Θ_d|: uncovered background
     and a shadow on the ground match at the background's as well or better), and its texture is not the
-    background's relit (texture_corr at most max_corr). at: (at_d, at_depth): at_depth, where the
-    background's map lies at the object's depth (None: nowhere), stands in for the margin where most of
-    the part (min_share) lies over it."""
-    at_d, at_depth = at
+    background's relit (texture_corr at most max_corr). at_depth, where the background's map lies at the
+    object's depth (None: nowhere), stands in for the margin where most of the part (min_share) lies over
+    it."""
     rest = changed & ~obj
     if not rest.any():
         return obj

@@ -159,6 +159,13 @@ def global_gain(key: U8, bg: NDArray[np.float32]) -> float | None:
     return float(np.median(key[ok].astype(np.float32) / bg[ok]))
 
 
+def frame_gain(key: U8, bg: NDArray[np.float32], stride: int) -> float | None:
+    """global_gain of a whole frame Γ (H, W) against its temporal background B (H, W), on every second cell
+    of the stride grid: about 5,000 cells at 640 x 480, plenty for a median (about 60 µs)."""
+    s = 2 * stride
+    return global_gain(key[::s, ::s], bg[::s, ::s])
+
+
 def change(key: U8, bg: NDArray[np.float32], g: float) -> NDArray[np.float32]:
     """|Γ - g B|: how far each pixel is from the temporal background at global gain g."""
     return np.asarray(np.abs(key.astype(np.float32) - np.float32(g) * bg), np.float32)

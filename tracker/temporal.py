@@ -36,7 +36,7 @@ from numpy.typing import NDArray
 
 from tracker.detect import Box, StereoSubtractor
 from tracker.frames import StereoFrame
-from tracker.masks import global_gain, largest_region, temporal_outline
+from tracker.masks import frame_gain, largest_region, temporal_outline
 from tracker.one_camera import OneCameraConfig, coast_sigma_px, hidden_from_right, nearest_prediction
 from tracker.rectify import Rectifier
 from tracker.regions import background_disparity, mask_centroid, median_behind, nearest_hint
@@ -190,7 +190,7 @@ class TemporalDetector:
         s, eps = self.sub.cfg.stride, self.sub.cfg.epsilon
         bg, dev = model
         key, bl = frame.left[::s, ::s], bg[::s, ::s]
-        g = global_gain(key[::2, ::2], bl[::2, ::2])  # every second cell is plenty for a median
+        g = frame_gain(frame.left, bg, s)
         if g is None:
             return found
         self.gain = g

@@ -25,7 +25,7 @@ from tracker.masks import (
     change,
     changed_holes_filled,
     found_pixels,
-    global_gain,
+    frame_gain,
     key_mask,
     largest_component,
     seen_changed,
@@ -335,13 +335,13 @@ class Verifier(RegionMatcher):
     def _at_depth(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap, model: tuple[F32, F32], d: float
                   ) -> BoolA | None:
         """growth.at_own_depth over the box (the background's map at the body's depth d, px) where the pixel
-        changed at the frame's global gain (masks.global_gain, as tracker.temporal takes it): most likely a
+        changed at the frame's global gain (masks.frame_gain, as tracker.temporal takes it): most likely a
         part of the body eq. (9) missed. The outline's own gain is taken on a ring about the region, so
         these pixels are left out of that ring: at endless:plate frame 1319 a plate's lower part before a
         post at its depth raised the ring's gain until the whole box changed, and the plate's outline took
         in 3,387 px of background about it (a false target at frame 1320). None without a global gain."""
         bg, dev = model
-        g = self._frame_gain(frame, bg)
+        g = frame_gain(frame.left, bg, self.cfg.stride)
         if g is None:
             return None
         x0, y0, x1, y1 = box
@@ -362,12 +362,6 @@ class Verifier(RegionMatcher):
             taken = left_out if taken is None else taken | left_out
         return temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1], dev[y0:y1, x0:x1],
                                 np.zeros_like(region) if core is None else core, region, self.cfg.epsilon, taken)
-
-    def _frame_gain(self, frame: StereoFrame, bg: F32) -> float | None:
-        """masks.global_gain of the frame against the temporal background B, on every second cell of the
-        stride grid as tracker.temporal takes it (about 5,000 cells: tens of microseconds)."""
-        s = 2 * self.cfg.stride
-        return global_gain(frame.left[::s, ::s], bg[::s, ::s])
 
     def _outline_stereo(self, frame: StereoFrame, box: Box, m_left: BoolA,
                         d_hint: float | None) -> tuple[BoolA, BoolA, float] | None:
