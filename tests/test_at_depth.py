@@ -41,3 +41,39 @@ def test_a_plates_part_at_its_backgrounds_depth_stays_out_of_its_outlines_gain()
     # plate changed: its outline took in 1,805 px of it, its centroid 11 px off (3,888 px and none off now)
     _, held, off = _target("endless:plate", 1320)
     assert held > 3000 and off < 0.1 * held
+
+
+def test_where_a_walker_stood_while_the_background_was_learnt_no_part_lies_at_its_depth(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # startup, stream learning: a walker stood at x = 0 from frame 0 for 1.5 s, so the learnt map holds it
+    # there at its own depth. At frame 56 it has walked off (its centroid at column 372); the place it left
+    # (columns 311-348) changed and lies "at its depth", but its edge is the model's, not the frame's
+    # (growth.without_uncovered: gradient 27 against 199 when measured)
+    from tracker.pipeline import Pipeline
+    from tracker.sim.scenarios import SimRig
+    from tracker.startup_eval import STARTUP
+
+    def stood_there(keep: bool) -> int:
+        if not keep:
+            monkeypatch.setattr(verify, "without_uncovered", lambda parts, key, bg: parts)
+        seen: list[int] = []
+        at_depth = verify.Verifier._at_depth
+
+        def spy(self: verify.Verifier, frame, box, cm, model, d):  # type: ignore[no-untyped-def]
+            out = at_depth(self, frame, box, cm, model, d)
+            if frame.index == 56 and out is not None:
+                seen.append(int(np.count_nonzero(out[:, : max(350 - box[0], 0)])))
+            return out
+
+        monkeypatch.setattr(verify.Verifier, "_at_depth", spy)
+        sim = SimRig(STARTUP, seed=0)
+        pipe = Pipeline(sim.rig)
+        pipe.learn_background_from_stream(sim.step().frame)
+        for _ in range(56):
+            pipe.step(sim.step().frame)
+        monkeypatch.undo()
+        assert seen, "the walker was not verified as a tracked body at frame 56"
+        return max(seen)
+
+    kept, without = stood_there(keep=True), stood_there(keep=False)
+    assert kept < 100 and without > 3000  # 0 and 4,184 px when measured

@@ -13,7 +13,7 @@ from sim_helpers import run_frames
 
 import tracker.verify as verify
 from tracker.bgdepth import CorrespondenceMap
-from tracker.growth import at_own_depth, grown_by_change, local_corr
+from tracker.growth import at_own_depth, grown_by_change, local_corr, without_uncovered
 
 EPS = 12
 
@@ -107,6 +107,22 @@ def test_the_background_at_a_bodys_depth_is_its_map_within_twice_the_depth_gap_t
     # d 20.4, twice the test (0.04, 0.5 px): d_bg within (20.4 - 1) / 1.08 = 17.96 and 20.4 x 1.08 + 1 = 23.03
     assert at_own_depth(cm, 20.4, 0.04, 0.5).tolist() == [[False, True, True, True, True, True, True]]
     assert not at_own_depth(replace(cm, valid=np.zeros(disparity.shape, bool)), 20.4, 0.04, 0.5).any()
+
+
+def test_a_part_whose_edge_is_the_models_rather_than_the_frames_is_left_out() -> None:
+    # a textured B with a bright box the model learnt where an object stood (columns 10-29), gone from Γ; an
+    # object in Γ (columns 50-69) that B does not hold: both change, only the object's edge is Γ's
+    rng = np.random.default_rng(3)
+    bg = rng.normal(100.0, 6.0, (60, 80)).clip(0, 255).astype(np.float32)
+    key = bg.astype(np.uint8).copy()
+    bg[10:50, 10:30] = rng.normal(190.0, 6.0, (40, 20))
+    key[10:50, 50:70] = rng.normal(190.0, 6.0, (40, 20)).clip(0, 255).astype(np.uint8)
+    parts = np.zeros(key.shape, bool)
+    parts[10:50, 10:30] = parts[10:50, 50:70] = True
+    kept = without_uncovered(parts, key, bg)
+    assert not kept[:, :40].any() and kept[:, 40:].sum() == 800
+    assert without_uncovered(parts[:, 40:], key[:, 40:], bg[:, 40:]).sum() == 800  # the object alone
+    assert not without_uncovered(np.zeros(key.shape, bool), key, bg).any()
 
 
 def _beyond_a_gap(gap_rows: int, seed: int = 7) -> tuple[np.ndarray, ...]:

@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from tracker.bgdepth import CorrespondenceMap
 from tracker.detect import Box, StereoSubtractor
 from tracker.frames import StereoFrame
-from tracker.growth import at_own_depth, grow_tracked
+from tracker.growth import at_own_depth, grow_tracked, without_uncovered
 from tracker.masks import (
     NEAR,
     change,
@@ -339,7 +339,9 @@ class Verifier(RegionMatcher):
         part of the body eq. (9) missed. The outline's own gain is taken on a ring about the region, so
         these pixels are left out of that ring: at endless:plate frame 1319 a plate's lower part before a
         post at its depth raised the ring's gain until the whole box changed, and the plate's outline took
-        in 3,387 px of background about it (a false target at frame 1320). None without a global gain."""
+        in 3,387 px of background about it (a false target at frame 1320). Parts whose edge is the model's
+        rather than the frame's are left out (growth.without_uncovered: where a walker stood while the
+        background was learnt, start-up). None without a global gain."""
         bg, dev = model
         g = frame_gain(frame.left, bg, self.cfg.stride)
         if g is None:
@@ -347,7 +349,8 @@ class Verifier(RegionMatcher):
         x0, y0, x1, y1 = box
         key, b = frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1]
         changed = change(key, b, g) > strict_limit(dev[y0:y1, x0:x1], g, self.cfg.epsilon)
-        return at_own_depth(cm, d, self.cfg.min_depth_gap, self.cfg.min_disparity_gap_px) & changed
+        at = at_own_depth(cm, d, self.cfg.min_depth_gap, self.cfg.min_disparity_gap_px) & changed
+        return without_uncovered(at, key, b * np.float32(g))  # the edges of g B against Γ's
 
     def _temporal_outline(self, frame: StereoFrame, box: Box, model: tuple[F32, F32], core: BoolA | None,
                           region: BoolA, found: list[Blob] | None, left_out: BoolA | None = None
