@@ -287,12 +287,12 @@ def test_a_tracked_shaded_square_is_outlined_whole_with_the_cameras_still() -> N
 
 
 def test_the_keys_recovery_keeps_half_a_window_off_the_pictures_edge_and_nothing_for_a_one_pixel_window() -> None:
-    from tracker.rim import _off_edges
+    from tracker.rim_recovery import off_edges
 
     m = np.ones((6, 7), bool)
-    cut = _off_edges(m, 2)
+    cut = off_edges(m, 2)
     assert cut[2:4, 2:5].all() and int(cut.sum()) == 2 * 3
-    assert _off_edges(m, 0).all()  # a 1-px window reaches nothing past its pixel
+    assert off_edges(m, 0).all()  # a 1-px window reaches nothing past its pixel
 
 
 def test_with_the_cameras_still_a_far_leg_near_the_learnt_grey_joins_where_the_stereo_pictures_decide() -> None:

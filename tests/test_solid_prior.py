@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from sim_helpers import run_frames
 
-from tracker import pipeline
+from tracker import partly_seen, pipeline
 from tracker.localize import Localizer
 from tracker.rectify import Rectifier
 from tracker.segmentation import outline_sigma_px
@@ -366,8 +366,8 @@ def test_a_person_hidden_below_gets_no_move_along_x_for_its_hidden_part(monkeypa
     # away from the centroid); an upright body's hidden legs stand under what is seen, so none counts. A
     # body the prior does not take for upright keeps the move.
     found = []
-    real = pipeline.cuts
-    monkeypatch.setattr(pipeline, "cuts", lambda *a, **k: found.append(real(*a, **k)) or found[-1])
+    real = partly_seen.cuts
+    monkeypatch.setattr(partly_seen, "cuts", lambda *a, **k: found.append(real(*a, **k)) or found[-1])
     pipe, sf, res = run_frames("foliage:body", 105)
     (det,) = res.detections
     found.clear()
@@ -458,7 +458,7 @@ def test_a_person_seen_side_on_has_its_centre_deeper_behind_its_face() -> None:
 
 
 def _side_cut(x0: int) -> tuple[tuple[float, float], tuple[bool, bool]]:
-    """Pipeline._partly_seen of a person's outline 16 x 60 px at disparity 22 px starting at column x0, before
+    """tracker.partly_seen of a person's outline 16 x 60 px at disparity 22 px starting at column x0, before
     a far background (2 px) that hides nothing: (x, y) extra 1-σ and whether width and height were seen whole."""
     from tracker.bgdepth import CorrespondenceMap
     from tracker.results import Blob
@@ -473,7 +473,8 @@ def _side_cut(x0: int) -> tuple[tuple[float, float], tuple[bool, bool]]:
     shape = grown.shape
     cm = CorrespondenceMap(np.zeros(shape, np.float32), np.zeros(shape, np.float32), np.ones(shape, bool),
                            np.full(shape, 2.0, np.float32), np.zeros(shape, np.uint8))
-    _, cut, whole = pipe._partly_seen(b, [], True, (grown, gbox, cm))
+    person = (pipe.localizer.solid, pipe.rect.b)
+    _, cut, whole = partly_seen.partly_seen(b, [], True, (grown, gbox, cm), size, pipe.visibility, person)
     return cut, whole
 
 

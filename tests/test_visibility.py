@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from tracker.bottom_edge import occluder_below
 from tracker.localize import Localizer
 from tracker.rectify import Rectifier
 from tracker.sim.rig import default_rig
@@ -16,7 +17,6 @@ from tracker.visibility import (
     cuts,
     extra_sigma_px,
     object_and_shadow,
-    occluder_below,
     padded,
     painted,
     with_objects,

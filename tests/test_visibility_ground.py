@@ -1,12 +1,13 @@
 """The centroid's 1-σ for a target whose lowest part is lost against the ground it stands on
-(tracker.visibility.unseen_below, issue 12 item 1): the offset the rows down to where the ground meets the
+(tracker.bottom_edge.unseen_below, issue 12 item 1): the offset the rows down to where the ground meets the
 target's depth would make."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from tracker.visibility import VisibilityConfig, padded, unseen_below
+from tracker.bottom_edge import unseen_below
+from tracker.visibility import VisibilityConfig, padded
 
 CFG = VisibilityConfig()
 SIZE = (640, 480)

@@ -27,6 +27,7 @@ from tracker.heading import HeadingHistory
 from tracker.localize import Localization, Localizer, with_gap_x
 from tracker.one_camera import OneCameraConfig
 from tracker.outline import OutlineConfig, warped_outline_sigma_px
+from tracker.partly_seen import partly_seen
 from tracker.rectify import Rectifier
 from tracker.regions import hints_inside
 from tracker.results import Blob, Detection, FrameResult
@@ -47,14 +48,8 @@ from tracker.tracks import MultiTracker, TrackerConfig
 from tracker.verify import Verifier
 from tracker.visibility import (
     VisibilityConfig,
-    cut_sigma_px,
-    cuts,
     object_and_shadow,
-    occluder_below,
     padded,
-    painted,
-    unseen_below,
-    with_objects,
 )
 
 F64 = NDArray[np.float64]
@@ -329,7 +324,7 @@ class Pipeline:
         quadrature, all being independent. Returned apart: the hull gap's x term (SigmaTerms.gap_x_px;
         `with_gap_x`), whether a nearer background hides the blob's bottom while its top is seen
         (SigmaTerms.hidden_below), and what may be hidden where the target is seen in part
-        (SigmaTerms.cut_px and seen_whole, `_partly_seen`). A wide body (SolidPrior.wide: a car side-on)
+        (SigmaTerms.cut_px and seen_whole, tracker.partly_seen). A wide body (SolidPrior.wide: a car side-on)
         has no hull-gap term along y: the gap beside its cabin, over its body, is its shape, not pixels
         the segmentation missed (occlusion:body, frames 50-174: 2.3 to 3.0 px along y, medians, for
         elevation errors of 0.32 to 1.56 px rms; 100 % of those frames within 1σ). Last: whether its track
@@ -339,7 +334,8 @@ class Pipeline:
         3.02 there."""
         others = [e for o in blobs if o is not b for e in object_and_shadow(o.box, o.mask, o.disparity, o.bg_disparity)]
         upright, wide = self._seen_as(b)
-        hidden_below, cut, whole = self._partly_seen(b, others, upright, ring, self._level_from(b, track_id))
+        hidden_below, cut, whole = partly_seen(b, others, upright, ring, self.rig.left.size, self.visibility,
+                                               (self.localizer.solid, self.rect.b), self._level_from(b, track_id))
         solid = self.localizer.solid  # a person whose top alone shows now: its track showed it whole
         known = hidden_below and not upright and solid is not None and track_id is not None and \
             self.extents.seen_upright(track_id, solid.upright_aspect)
@@ -353,44 +349,6 @@ class Pipeline:
         for ox, oy in terms:
             px, py = float(np.hypot(px, ox)), float(np.hypot(py, oy))
         return (px, py), gap_x, hidden_below, cut, whole, known
-
-    def _partly_seen(self, b: Blob, others: list[tuple[Box, BoolA, float]], upright: bool,
-                     ring: tuple[BoolA, Box, CorrespondenceMap], level_from: float | None = None
-                     ) -> tuple[bool, tuple[float, float], tuple[bool, bool]]:
-        """Whether a nearer background cuts the blob's bottom and nothing its top, and the centroid's
-        extra 1-σ (px, x and y) where the blob is cut by the image border, by another object found this
-        frame (others: box, mask, disparity) or by a nearer background (the cameras moving, too: pan:body
-        elevation within 1σ 0.54 -> 0.67), with the move across the cut sides; and, in quadrature, the offset
-        of the rows down to the ground where the blob's lowest part may be lost against it
-        (tracker.visibility). All of it is what may be hidden: SigmaTerms.cut_px; and whether the width
-        and the height were seen whole (SigmaTerms.seen_whole). An upright body (`upright`: a person) whose bottom a
-        nearer background hides, its top seen, has no move along x across that bottom: `cuts` takes the
-        hidden part to go on beyond the occluder's edge away from the visible centroid, but a person's
-        hidden legs stand under what is seen. On the frames such a body is placed from its top (walk,
-        foliage, two-targets, endless), that move made the centroid's x term 0.45 to 1.17 px (medians)
-        for azimuth errors of 0.15 to 0.27 px (medians); 90 to 98 % of those frames were within 1σ. One cut at
-        a side: y's term holds its shortfall of a person's stature / √12 (endless:body, frames 1546-1548)."""
-        mask, box, cm = ring  # the blob's mask over its box grown (`padded`), the correspondences there
-        disp, valid = with_objects(cm.disparity, cm.valid, box, others)
-        n = min(b.box[3] + 2, self.rig.left.size[1]) - box[1]  # cut_sides: the 2-px ring below, not the ground
-        objects = painted(box, others)
-        seen = cuts(mask[:n], (box[0], box[1], box[2], box[1] + n), self.rig.left.size, b.disparity,
-                    None if disp is None else disp[:n], None if valid is None else valid[:n], self.visibility,
-                    None if objects is None else objects[:n], level_from)
-        sx, sy = seen.skew
-        tall = occluder_below(mask, b.disparity, disp, valid, self.visibility) if seen.bottom_by_background else None
-        px, py = cut_sigma_px(b.mask, seen, self.visibility, tall)
-        ux, uy = unseen_below(mask, b.disparity, disp, valid, self.visibility)
-        left, right, top, bottom = seen.sides
-        hidden_below = seen.bottom_by_background and not top
-        if hidden_below and upright:  # a person's hidden lower part stands under what is seen
-            sx = 0.0
-        if upright and (left or right) and self.localizer.solid is not None:  # the rest above or below it
-            h = float(np.ptp(np.flatnonzero(b.mask.any(axis=1))) + 1)
-            sy = float(np.hypot(sy, self.localizer.solid.short_of_stature_px(h, b.disparity, self.rect.b) / 12**0.5))
-        whole = (not (left or right) and ux == 0.0, not (top or bottom) and uy == 0.0)
-        cut = (float(np.sqrt(px * px + sx * sx + ux * ux)), float(np.sqrt(py * py + sy * sy + uy * uy)))
-        return hidden_below, cut, whole
 
     def _level_from(self, b: Blob, track_id: int | None) -> float | None:
         """The disparity (px) a background is judged level with the blob from (tracker.visibility.cuts): its

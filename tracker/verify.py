@@ -45,7 +45,8 @@ from tracker.regions import (
     nearest_hint,
 )
 from tracker.results import Blob
-from tracker.rim import DEFAULT_RIM, RimConfig, RimRecovery
+from tracker.rim import RimConfig
+from tracker.rim_recovery import DEFAULT_RIM, RimRecovery
 from tracker.split import hidden_between, join, own_pixels, rival_gap, same_body
 
 U8 = NDArray[np.uint8]
