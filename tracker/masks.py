@@ -75,6 +75,22 @@ def with_head(mask: BoolA, close: bool = False) -> BoolA:
     return _filled(keep, mask.shape)
 
 
+def with_parts(outline: BoolA, region: BoolA) -> BoolA:
+    """The outline and each other component of `region` (after a closing, holes filled; at least HEAD_MIN_PX)
+    that is a part of its body (split.same_body at one depth), above it or below: a body the left camera
+    alone sees, at the left border, whose change mask the background's bands split at the waist. There
+    `with_head`'s largest component may be its legs alone (endless:body, frames 486-488: 24-32 px from the
+    truth's centroid), and no stereo match tells the parts apart (tracker.temporal's one-camera sightings)."""
+    every = largest_component(region, close=True, every=True) & ~outline
+    n, lab = cv2.connectedComponents(every.view(np.uint8), connectivity=8)
+    out = outline.copy()
+    for k in range(1, n):
+        part = lab == k
+        if int(np.count_nonzero(part)) >= HEAD_MIN_PX and same_body(outline, 1.0, part, 1.0):
+            out |= part
+    return out
+
+
 def _outer_contours(mask: BoolA, close: bool) -> Sequence[MatLike]:
     """The outer contours of a mask's 8-connected components; with `close`, after a morphological closing."""
     m8 = mask.astype(np.uint8)
