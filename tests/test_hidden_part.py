@@ -9,6 +9,7 @@ import pytest
 from sim_helpers import run_frames
 
 import tracker.boxes as boxes
+import tracker.temporal as temporal
 import tracker.verify as verify
 from tracker.evaluation import _on
 from tracker.split import hidden_between
@@ -65,11 +66,14 @@ def test_a_walkers_leg_beside_a_nearer_box_joins_its_upper_body(monkeypatch: pyt
 def test_a_walker_beside_a_box_its_track_predicted_about_keeps_its_legs(monkeypatch: pytest.MonkeyPatch) -> None:
     # frame 464: the walker's region beside the box, its track's predicted centroid in a gap of it, the map
     # nearer than the walker there (the box's disparity carried leftwards); refused as a new region, the
-    # upper part alone was kept, 38 px above the truth's centroid
+    # upper part alone was kept, 38 px above the truth's centroid. The temporal stage's stacked boxes
+    # (tracker.temporal._groups) find it whole as well since (1.9 px without _AROUND_PX, 8.3 px with it);
+    # without either, it comes out in two
     errors = _walker_errors(464)
     assert len(errors) == 1 and errors[0] < 10.0
     monkeypatch.setattr(verify, "_AROUND_PX", 0.0)
-    assert all(e > 20.0 for e in _walker_errors(464))  # 29 and 53 px when measured, the walker in two
+    monkeypatch.setattr(temporal, "stacked_joined", lambda boxes, cells: (tuple(boxes), tuple(cells)))
+    assert all(e > 20.0 for e in _walker_errors(464))  # 29 and 53 px when measured
 
 
 def test_a_walkers_leg_in_a_candidate_box_of_its_own_joins_its_upper_body(monkeypatch: pytest.MonkeyPatch) -> None:
