@@ -1,5 +1,5 @@
 """A region at the left border with no track predicted on it takes the disparity of the one track predicted
-within its bounding rectangle (tracker.verify._at_left_border): the right camera sees little of it, so a
+within its bounding rectangle (tracker.regions.at_left_border): the right camera sees little of it, so a
 new object's search there is cut short."""
 
 from __future__ import annotations
@@ -12,6 +12,7 @@ import pytest
 from sim_helpers import box_blob
 
 import tracker.pipeline as pipeline
+import tracker.regions as regions
 import tracker.stereo as stereo
 import tracker.temporal as temporal
 import tracker.verify as verify
@@ -26,10 +27,10 @@ from tracker.split import join_occluded
 def test_only_regions_starting_within_the_disparity_of_the_left_border_count() -> None:
     region = np.zeros((20, 40), bool)
     region[5:15, 3:30] = True
-    assert verify._at_left_border(region, (0, 100, 40, 120), 16.0)  # starts at x = 3 < 16 + 8
-    assert verify._at_left_border(region, (20, 100, 60, 120), 16.0)  # x = 23
-    assert not verify._at_left_border(region, (30, 100, 70, 120), 16.0)  # x = 33
-    assert not verify._at_left_border(np.zeros((20, 40), bool), (0, 100, 40, 120), 16.0)
+    assert regions.at_left_border(region, (0, 100, 40, 120), 16.0)  # starts at x = 3 < 16 + 8
+    assert regions.at_left_border(region, (20, 100, 60, 120), 16.0)  # x = 23
+    assert not regions.at_left_border(region, (30, 100, 70, 120), 16.0)  # x = 33
+    assert not regions.at_left_border(np.zeros((20, 40), bool), (0, 100, 40, 120), 16.0)
 
 
 def _run(name: str, frames: range) -> Iterator[tuple[Pipeline, FrameTruth, list[Detection]]]:
@@ -86,7 +87,8 @@ def test_a_plate_at_the_left_border_takes_its_tracks_disparity(monkeypatch: pyte
     # by the border); with its track's disparity, 0.03 px
     with_rule = _plate_disparity_errors(range(65, 70))
     assert len(with_rule) == 5 and max(abs(e) for e in with_rule) < 0.1
-    monkeypatch.setattr(verify, "_at_left_border", lambda *a: False)
+    monkeypatch.setattr(verify, "at_left_border", lambda *a: False)
+    monkeypatch.setattr(regions, "at_left_border", lambda *a: False)
     monkeypatch.setattr(verify, "_REACH_PX", 0)  # nor a hint found within reach of the region's pixels
     monkeypatch.setattr(stereo, "ROBUST_ROUNDS", 0)  # and least squares (the robust fit mends these frames too)
     without = _plate_disparity_errors(range(65, 70))
@@ -98,7 +100,7 @@ def test_a_piece_at_the_border_not_found_anew_takes_the_disparity_of_the_rest(mo
     # verified again at the car's track's disparity it is joined to the rest beyond the post
     frames = _car_centroid_errors(range(128, 130))
     assert all(len(f) == 1 and f[0][0] < 1.0 and not f[0][1] for f in frames)
-    monkeypatch.setattr(verify, "_border_hints", lambda *a: [])
+    monkeypatch.setattr(verify, "border_hints", lambda *a: [])
     assert all(len(f) == 1 and f[0][0] > 20.0 for f in _car_centroid_errors(range(128, 130)))
 
 

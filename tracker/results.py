@@ -50,7 +50,7 @@ class Blob:
     gain: float = 1.0
     one_camera: bool = False
     parts: tuple[PartFit, ...] = ()
-    part_only: bool = False  # verified at the disparity of a track beyond it (tracker.verify._border_hints)
+    part_only: bool = False  # verified at the disparity of a track beyond it (tracker.regions.border_hints)
 
 
 @dataclass(frozen=True)

@@ -37,7 +37,9 @@ from tracker.masks import (
 from tracker.rectify import Rectifier
 from tracker.region_match import RegionMatcher
 from tracker.regions import (
+    at_left_border,
     background_disparity,
+    border_hints,
     hints_around,
     in_front,
     mask_centroid,
@@ -59,6 +61,10 @@ _PART_TRIES = 2  # regions of a box verified as parts of a body found before (tr
 
 
 _REACH_PX = 4  # a track's predicted centroid in a gap of the key mask's region (an arm's, a crack) still names it
+# how far outside a region's rectangle a track predicted about it still counts (hints_around): a walker's
+# predicted centroid lies below a region of its upper body (endless:body frame 465: 4.3 px below), or beside
+# its occlusion shadow, all the left key shows of a walker before a wall at its own depth (frame 1329: 7.7 px)
+_AROUND_MARGIN_PX = 8
 _AROUND_PX = 1.0  # a track predicted within a region's rectangle this near its match (px) names it (_seen_through)
 
 
@@ -68,42 +74,6 @@ def _part_of(found: list[Blob], region: BoolA, area: int, min_part_px: int) -> B
     if area < min_part_px:
         return None
     return next((f for f in found if same_body(f.mask, f.disparity, region, f.disparity)), None)
-
-
-def _at_left_border(region: BoolA, box: Box, d: float) -> bool:
-    """Whether a region starts within d + 8 px of the left border (d: a tracked object's disparity, px),
-    where the right camera sees little or none of it (x < d) and a new object's search is cut short
-    (Verifier._strips): there a track predicted within the region's bounding rectangle, though not on it,
-    gives the disparity (the car of occlusion:body at the left border, split by the post, its centroid
-    predicted on the post: searched anew, it was not found in frame 5, and the part beyond the post
-    started a second track; identity switches 2 -> 0. Since holes closed by the rim's growth are filled
-    (masks.changed_holes_filled) the car stays whole there without it; occlusion:plate's plate leaving at
-    the border, frames 65-90, matches 0.39 px off without it, 0.03 px with it: range RMSE 0.103 against
-    0.058 m; the car's is 0.347 m without it against 0.380 m with it, frames 5-24 matched up to 1.4 px
-    nearer on the hint).
-    Elsewhere such a hint may be another object's, or the region a part at another depth: taken anywhere,
-    far plates split by the hedge lost their lower part (endless:plate, elevation errors of 1 deg)."""
-    cols = np.flatnonzero(region.any(axis=0))
-    return bool(cols.size) and box[0] + int(cols[0]) < d + 8.0
-
-
-def _border_hints(hints: F64 | None, region: BoolA, box: Box) -> list[float]:
-    """The predicted disparities (px) of the tracks predicted in the rows of a region that starts at the left
-    border (`_at_left_border` at each track's disparity) and right of it, nearest first: the rest of a body
-    beyond what splits it. A new object's search is cut short at the border, where the right camera sees
-    little of the region, and fails now and then where it succeeded the frame before (occlusion:body frames
-    128-129: the car's piece left of the post searched anew at 24.2 px against its 16.1 px, lost, the
-    centroid 29 px off). Tried after the search has failed, the region verified at that disparity as a
-    tracked object's would be; the blob is a part only (Blob.part_only), kept if the pipeline joins it to
-    the rest (tracker.split.join_occluded): taken alone, a plate's piece beside a post at its own depth was
-    a false target (endless:plate frame 1326)."""
-    if hints is None or len(hints) == 0 or not region.any():
-        return []
-    bx, by, bw, bh = cv2.boundingRect(region.view(np.uint8))  # as regions.hints_around
-    y0, y1, x1 = box[1] + by, box[1] + by + bh - 1, box[0] + bx + bw - 1
-    near = sorted((float(h[0]) - x1, float(h[2])) for h in hints
-                  if y0 <= h[1] <= y1 and h[0] > x1 and _at_left_border(region, box, float(h[2])))
-    return [d for _, d in near]
 
 
 class Verifier(RegionMatcher):
@@ -148,19 +118,21 @@ class Verifier(RegionMatcher):
             else:
                 part_tries -= 1
             hint = part_of.disparity if part_of is not None else nearest_hint(hints, m_left, box, _REACH_PX)
-            around = hints_around(hints, m_left, box)
-            if hint is None and len(around) == 1 and _at_left_border(m_left, box, around[0]):
+            around = hints_around(hints, m_left, box, _AROUND_MARGIN_PX)
+            if hint is None and len(around) == 1 and at_left_border(m_left, box, around[0]):
                 hint = around[0]  # one track predicted past the region's edge (a car split by a post)
             new_later = hint is None and may_search is not None and not may_search()
             got = None if new_later or self._too_small_to_be_new(n_left, hint) else self._verify_region(
                 frame, box, cm, m_left, hint, free, around, found)
-            if got is None and hint is not None and _at_left_border(m_left, box, hint):
+            if got is None and hint is not None and at_left_border(m_left, box, hint):
                 got, m_left = self._every_region_at_border(frame, box, cm, (m_raw, m_left), hint, free, around,
                                                            found)
             if got is None and hint is None and not new_later:  # no track's, and not found (or too small) anew
-                got = next((g for d in _border_hints(hints, m_left, box) if (g := self._verify_region(
+                got = next((g for d in border_hints(hints, m_left, box) if (g := self._verify_region(
                     frame, box, cm, m_left, d, free, around, found)) is not None), None)
                 got = None if got is None else (replace(got[0], part_only=True), got[1])
+            if got is not None and hint is None and part_of is None:  # found anew: a track's object after all?
+                got, m_left = self._as_tracked(frame, box, cm, (got, m_left), hints, free, found)
             hidden = None  # or a part of an object found before, a nearer background hiding what lies between
             if got is None and hint is None and not new_later:
                 got, hidden = self._hidden_part(frame, box, cm, m_left, free, around, found)
@@ -186,7 +158,7 @@ class Verifier(RegionMatcher):
     def _every_region_at_border(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap,
                                 masks: tuple[BoolA, BoolA], d: float, free: BoolA, around: list[float],
                                 found: list[Blob]) -> tuple[tuple[Blob, BoolA | None] | None, BoolA]:
-        """A tracked object's region at the left border (`_at_left_border` at its track's disparity d) that
+        """A tracked object's region at the left border (`regions.at_left_border` at its track's disparity d) that
         failed verification, verified again as every region of the box's left-key mask at once (masks: that
         mask and the region). The right camera sees none of the object left of x = d, so the mask there
         falls apart into regions and the largest may hold too little the right camera sees to be matched:
@@ -200,6 +172,30 @@ class Verifier(RegionMatcher):
             return None, region
         got = self._verify_region(frame, box, cm, every, d, free, around, found)
         return got, (region if got is None else every)
+
+    def _as_tracked(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap,
+                    first: tuple[tuple[Blob, BoolA | None], BoolA], hints: F64 | None, free: BoolA,
+                    found: list[Blob]) -> tuple[tuple[Blob, BoolA | None], BoolA]:
+        """A region no track names, verified as a new object (first: that verification and the region), whose
+        object a track is predicted on (its predicted centroid on the object's outline or within _REACH_PX of
+        it, at a disparity within rival_gap of the object's), verified again at that track's disparity over the
+        region and the outline together: what is done for a tracked object alone then applies
+        (`_tracked_outline`: the outline drawn over both keys' regions and grown into the changed pixels
+        about it). Kept where it covers more. endless:body frame 222: the left key's region is a walker's arm
+        and side (1,067 px), its track predicted beside it, not on it; verified anew the outline held 3,457
+        px, as the track's 4,384 of the walker's 4,437 (the centroid 2.2 -> 1.5 px from the truth's). Returns
+        the verification kept and the region it was made on."""
+        got, region = first
+        blob = got[0]
+        d = nearest_hint(hints, blob.mask, box, _REACH_PX)
+        if d is None or abs(d - blob.disparity) >= rival_gap(blob.disparity):
+            return got, region
+        joined = region | blob.mask
+        around = hints_around(hints, joined, box, _AROUND_MARGIN_PX)
+        again = self._verify_region(frame, box, cm, joined, d, free, around, found)
+        if again is None or again[0].area <= blob.area:
+            return got, region
+        return again, joined
 
     def _hidden_part(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap, region: BoolA, free: BoolA,
                      around: list[float], found: list[Blob]) -> tuple[tuple[Blob, BoolA | None] | None, int | None]:
