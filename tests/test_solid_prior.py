@@ -484,5 +484,26 @@ def test_a_person_cut_at_a_side_of_the_image_holds_the_rest_of_its_stature_in_y(
     cut, whole = _side_cut(640 - 16)  # at the right border: the rest of the person is above or below what is seen
     assert not whole[0]
     assert cut[1] >= short / math.sqrt(12.0) - 1e-6 > 15.0
-    inside, seen = _side_cut(300)  # the same outline clear of every border: nothing may be hidden
-    assert inside == (0.0, 0.0) and seen == (True, True)
+    # the same outline clear of every border: nothing hides its sides, but under part_share of a person's
+    # stature with no cut found, the rest of the person may lie anywhere above or below (unseen_rest_px)
+    inside, seen = _side_cut(300)
+    assert inside == (0.0, pytest.approx(short / math.sqrt(12.0))) and seen == (True, False)
+
+
+def test_a_person_seen_in_part_where_no_cut_was_found_may_be_anywhere_about_it() -> None:
+    prior = SolidPrior()
+    stature = 1.7 * 16.5 / 0.3  # 93.5 px at 16.5 px of disparity, baseline 0.3 m
+    # endless:body seed 1 frame 2545: a walker behind a post, a sliver 9 x 34 px beside the post seen, the map
+    # beside it far: no cut found, its azimuth error 1.27 deg (13 px) against a 1-σ of 0.009 deg
+    x, y = prior.unseen_rest_px(9.0, 34.0, 16.5, 0.3, (False, False))
+    assert x == pytest.approx((0.5 * stature - 9.0) / 12**0.5)
+    assert y == pytest.approx((stature - 34.0) / 12**0.5)
+    assert prior.unseen_rest_px(9.0, 34.0, 16.5, 0.3, (True, True)) == (None, None)  # the cuts' terms hold
+    assert prior.unseen_rest_px(9.0, 60.0, 16.5, 0.3, (False, False)) == (None, None)  # 0.64 of the stature
+    # a walker's upper body over what hides its legs, as wide as a person: its width is whole
+    x, y = prior.unseen_rest_px(30.0, 50.0, 16.5, 0.3, (False, False))
+    assert x is None and y == pytest.approx((stature - 50.0) / 12**0.5)
+    # a fragment under 0.3 of the stature: its width says nothing either
+    x, _ = prior.unseen_rest_px(16.0, 27.0, 16.5, 0.3, (False, True))
+    assert x == pytest.approx((0.5 * stature - 16.0) / 12**0.5)
+    assert prior.unseen_rest_px(9.0, 34.0, 16.5, 0.0, (False, False)) == (None, None)

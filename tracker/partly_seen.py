@@ -33,6 +33,10 @@ def partly_seen(b: Blob, others: list[tuple[Box, BoolA, float]], upright: bool,
     foliage, two-targets, endless), that move made the centroid's x term 0.45 to 1.17 px (medians)
     for azimuth errors of 0.15 to 0.27 px (medians); 90 to 98 % of those frames were within 1σ. One cut at
     a side: y's term holds its shortfall of a person's stature / √12 (endless:body, frames 1546-1548).
+    An upright body under part_share of a person's stature with no cut found on an axis: the rest of the
+    person lies anywhere about it (SolidPrior.unseen_rest_px; endless:body with seed 1, frames 2512-2585, a
+    walker behind a post seen as a sliver beside it, the map beside it far: azimuth errors of 1.3° against a
+    1-σ of 0.009°), and that axis is not seen whole.
     size: the image's (width, height); person: the SolidPrior (None: none) and the baseline (m);
     level_from: tracker.pipeline's `_level_from`."""
     mask, box, cm = ring  # the blob's mask over its box grown (`padded`), the correspondences there
@@ -55,5 +59,19 @@ def partly_seen(b: Blob, others: list[tuple[Box, BoolA, float]], upright: bool,
         h = float(np.ptp(np.flatnonzero(b.mask.any(axis=1))) + 1)
         sy = float(np.hypot(sy, solid.short_of_stature_px(h, b.disparity, baseline_m) / 12**0.5))
     whole = (not (left or right) and ux == 0.0, not (top or bottom) and uy == 0.0)
+    if upright and solid is not None:  # a person seen in part where no cut was found
+        rx, ry = _unseen_rest(b.mask, b.disparity, solid, baseline_m, (not whole[0], not whole[1]))
+        ux, uy = ux if rx is None else rx, uy if ry is None else ry
+        whole = (whole[0] and rx is None, whole[1] and ry is None)
     cut = (float(np.sqrt(px * px + sx * sx + ux * ux)), float(np.sqrt(py * py + sy * sy + uy * uy)))
     return hidden_below, cut, whole
+
+
+def _unseen_rest(mask: BoolA, disparity: float, solid: SolidPrior, baseline_m: float, cut: tuple[bool, bool]
+                 ) -> tuple[float | None, float | None]:
+    """SolidPrior.unseen_rest_px for the outline's extent."""
+    m8 = mask.view(np.uint8)
+    cols, rows = np.flatnonzero(m8.any(axis=0)), np.flatnonzero(m8.any(axis=1))
+    if cols.size == 0:
+        return None, None
+    return solid.unseen_rest_px(float(np.ptp(cols) + 1), float(np.ptp(rows) + 1), disparity, baseline_m, cut)

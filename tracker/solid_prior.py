@@ -185,6 +185,7 @@ class SolidPrior:
     upright_ratio: float = 0.36
     upright_ratio_sigma: float = 0.015
     upright_girth: float = 0.50
+    thinnest: float = 0.12
     upright_side_ratio: float = 0.44
     upright_side_sigma: float = 0.20
     upright_x_sigma: float = 0.0028
@@ -243,6 +244,24 @@ class SolidPrior:
         disparity (px; rectified, baseline_m the rig's baseline): height_m d / b - h, at least 0. Seen only in
         part at a side (a walker entering the image), the rest of the person may lie above or below it."""
         return max(self.height_m * disparity / baseline_m - height_px, 0.0) if baseline_m > 0 else 0.0
+
+    def unseen_rest_px(self, width_px: float, height_px: float, disparity: float, baseline_m: float,
+                       cut: tuple[bool, bool]) -> tuple[float | None, float | None]:
+        """What an upright outline width_px x height_px under part_share of a person of height_m at its
+        disparity (px; baseline_m the rig's) says of the rest of the person, hidden where no cut was seen
+        (cut: whether one was seen across x, at the left or right, and across y, at the top or bottom): the
+        centroid's 1-σ (px) along an axis with no cut, its shortfall / √12 (anywhere about what is seen):
+        the height's against the stature H; the width's against a person's girth (upright_girth H) where the
+        outline is narrower than any side of a person (`thinnest` H: a sliver beside what hides the rest).
+        None for an axis not so."""
+        if baseline_m <= 0:
+            return None, None
+        stature = self.height_m * disparity / baseline_m
+        if height_px >= self.part_share * stature:
+            return None, None
+        fragment = width_px < self.thinnest * stature or height_px < self.part_share * stature / 2.0
+        x = None if cut[0] or not fragment else max(self.upright_girth * stature - width_px, 0.0) / 12**0.5
+        return x, None if cut[1] else (stature - height_px) / 12**0.5
 
     def wide(self, width_px: float, height_px: float) -> bool:
         """Whether a target seen width_px wide and height_px high is a wide body (a vehicle side-on)."""
