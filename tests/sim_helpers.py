@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tracker.evaluation import target_prior
+from tracker.evaluation import _on, target_prior
 from tracker.pipeline import Pipeline
 from tracker.results import Blob, FrameResult
 from tracker.sim.scenarios import SimFrame, SimRig, get_scenario
@@ -21,6 +21,15 @@ def run_frames(name: str, frames: int) -> tuple[Pipeline, SimFrame, FrameResult]
         sf = sim.step()
         res = pipe.step(sf.frame)
     return pipe, sf, res
+
+
+def walker_errors(name: str, frame: int) -> list[float]:
+    """A scenario run to `frame`: the centroid errors (px) of the detections mostly on target 1 there."""
+    _, sf, res = run_frames(name, frame + 1)
+    tt = sf.truth.target(1)
+    assert tt is not None and tt.centroid_left is not None
+    return [float(np.hypot(*(d.blob.centroid_raw - tt.centroid_left))) for d in res.detections
+            if _on(d, tt, sf.truth.ids_left)]
 
 
 def box_blob(box: tuple[int, int, int, int], d: float, d_bg: float, part_only: bool = False) -> Blob:

@@ -6,20 +6,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from sim_helpers import run_frames
+from sim_helpers import walker_errors
 
 import tracker.verify as verify
-from tracker.evaluation import _on
 from tracker.regions import hints_around
-
-
-def _walker_errors(frame: int) -> list[float]:
-    """endless:body run to `frame`: the centroid errors (px) of the detections mostly on the walker there."""
-    _, sf, res = run_frames("endless:body", frame + 1)
-    tt = sf.truth.target(1)
-    assert tt is not None and tt.centroid_left is not None
-    return [float(np.hypot(*(d.blob.centroid_raw - tt.centroid_left))) for d in res.detections
-            if _on(d, tt, sf.truth.ids_left)]
 
 
 def test_a_track_predicted_just_outside_a_regions_rectangle_is_around_it() -> None:
@@ -34,10 +24,10 @@ def test_a_walkers_upper_body_below_its_predicted_centroid_is_its_tracks(monkeyp
     # frame 465: a walker beside a box, its left key region its upper body (rows 226-309), its track's
     # predicted centroid 4.3 px below that region's rectangle: not counted as predicted about it, the region
     # failed as a new object and the temporal stage found part of it as another (26.5 px off when measured)
-    errors = _walker_errors(465)
+    errors = walker_errors("endless:body", 465)
     assert len(errors) == 1 and errors[0] < 3.0  # 0.2 px when measured
     monkeypatch.setattr(verify, "_AROUND_MARGIN_PX", 0)
-    assert all(e > 15.0 for e in _walker_errors(465))
+    assert all(e > 15.0 for e in walker_errors("endless:body", 465))
 
 
 def test_a_walker_found_anew_where_its_track_is_predicted_is_verified_as_tracked(
@@ -45,8 +35,8 @@ def test_a_walker_found_anew_where_its_track_is_predicted_is_verified_as_tracked
     # frames 460-465: a walker beside a box, its left key region a part of it with its track predicted
     # beside it, not on it; verified anew, without the track's growth, its outline at frame 465 was 6.4 px
     # from the truth's centroid when measured
-    errors = _walker_errors(465)
+    errors = walker_errors("endless:body", 465)
     assert len(errors) == 1 and errors[0] < 3.0  # 0.2 px when measured
     monkeypatch.setattr(verify.Verifier, "_as_tracked", lambda self, frame, box, cm, first, *a: first)
-    errors = _walker_errors(465)
+    errors = walker_errors("endless:body", 465)
     assert len(errors) == 1 and errors[0] > 5.0

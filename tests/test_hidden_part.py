@@ -6,12 +6,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from sim_helpers import run_frames
+from sim_helpers import walker_errors
 
 import tracker.boxes as boxes
 import tracker.temporal as temporal
 import tracker.verify as verify
-from tracker.evaluation import _on
 from tracker.split import hidden_between
 
 D = 25.0  # the body's disparity (px)
@@ -44,22 +43,13 @@ def test_a_leg_beside_the_box_that_hides_the_rest_is_a_hidden_part() -> None:
     assert not hidden_between(body_short, D, aside, bg, 0.04, 1.0)
 
 
-def _walker_errors(frame: int) -> list[float]:
-    """endless:body run to `frame`: the centroid errors (px) of the detections mostly on the walker there."""
-    _, sf, res = run_frames("endless:body", frame + 1)
-    tt = sf.truth.target(1)
-    assert tt is not None and tt.centroid_left is not None
-    return [float(np.hypot(*(d.blob.centroid_raw - tt.centroid_left))) for d in res.detections
-            if _on(d, tt, sf.truth.ids_left)]
-
-
 def test_a_walkers_leg_beside_a_nearer_box_joins_its_upper_body(monkeypatch: pytest.MonkeyPatch) -> None:
     # frame 274: the walker's upper body over a box, one leg beside it 15 rows below; the leg alone (390 px,
     # slanted) matched at 26.7 px against the walker's 25.6 and was refused, the centroid 24 px high
-    errors = _walker_errors(274)
+    errors = walker_errors("endless:body", 274)
     assert len(errors) == 1 and errors[0] < 3.0
     monkeypatch.setattr(verify, "hidden_between", lambda *a: False)
-    errors = _walker_errors(274)
+    errors = walker_errors("endless:body", 274)
     assert len(errors) == 1 and errors[0] > 15.0
 
 
@@ -69,18 +59,18 @@ def test_a_walker_beside_a_box_its_track_predicted_about_keeps_its_legs(monkeypa
     # upper part alone was kept, 38 px above the truth's centroid. The temporal stage's stacked boxes
     # (tracker.temporal._groups) find it whole as well since (1.9 px without _AROUND_PX, 8.3 px with it);
     # without either, it comes out in two
-    errors = _walker_errors(464)
+    errors = walker_errors("endless:body", 464)
     assert len(errors) == 1 and errors[0] < 10.0
     monkeypatch.setattr(verify, "_AROUND_PX", 0.0)
     monkeypatch.setattr(temporal, "stacked_joined", lambda boxes, cells: (tuple(boxes), tuple(cells)))
-    assert all(e > 20.0 for e in _walker_errors(464))  # 29 and 53 px when measured
+    assert all(e > 20.0 for e in walker_errors("endless:body", 464))  # 29 and 53 px when measured
 
 
 def test_a_walkers_leg_in_a_candidate_box_of_its_own_joins_its_upper_body(monkeypatch: pytest.MonkeyPatch) -> None:
     # frame 457: the leg beside the box 20 px below the upper body, in a box of its own (tracker.boxes):
     # verified apart it was refused, the centroid 19 px high; its box now joins the upper body's
-    errors = _walker_errors(457)
+    errors = walker_errors("endless:body", 457)
     assert len(errors) == 1 and errors[0] < 3.0  # 0.3 px when measured
     monkeypatch.setattr(boxes, "STACK_GAP_REL", 0.0)  # stacked boxes join within 8 px only, as before
-    errors = _walker_errors(457)
+    errors = walker_errors("endless:body", 457)
     assert len(errors) == 1 and errors[0] > 15.0

@@ -5,10 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from sim_helpers import run_frames
+from sim_helpers import walker_errors
 
 import tracker.verify as verify
-from tracker.evaluation import _on
 
 
 def test_an_object_at_its_backgrounds_depth_is_kept_when_tracked_changed_and_not_behind() -> None:
@@ -28,15 +27,8 @@ def test_an_object_at_its_backgrounds_depth_is_kept_when_tracked_changed_and_not
 def test_a_walker_before_a_wall_at_its_own_depth_keeps_its_tracked_outline(monkeypatch: pytest.MonkeyPatch) -> None:
     # endless:body frame 1327: the walker matched at 20.74 px before a map of 19.60 px; refused, the temporal
     # stage's outline (1,420 px) stood in, 13.5 px from the truth's centroid (5.7 px when measured with it)
-    def errors() -> list[float]:
-        _, sf, res = run_frames("endless:body", 1328)
-        tt = sf.truth.target(1)
-        assert tt is not None and tt.centroid_left is not None
-        return [float(np.hypot(*(d.blob.centroid_raw - tt.centroid_left))) for d in res.detections
-                if _on(d, tt, sf.truth.ids_left)]
-
-    got = errors()
+    got = walker_errors("endless:body", 1327)
     assert len(got) == 1 and got[0] < 8.0
     monkeypatch.setattr(verify.Verifier, "_changed_at_depth", lambda self, *a: False)
-    got = errors()
+    got = walker_errors("endless:body", 1327)
     assert len(got) == 1 and got[0] > 11.0
