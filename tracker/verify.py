@@ -158,8 +158,8 @@ class Verifier(RegionMatcher):
     def _every_region_at_border(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap,
                                 masks: tuple[BoolA, BoolA], d: float, free: BoolA, around: list[float],
                                 found: list[Blob]) -> tuple[tuple[Blob, BoolA | None] | None, BoolA]:
-        """A tracked object's region at the left border (`regions.at_left_border` at its track's disparity d) that
-        failed verification, verified again as every region of the box's left-key mask at once (masks: that
+        """A tracked object's region at the left border (`regions.at_left_border` at its track's disparity d)
+        that failed verification, verified again as every region of the box's left-key mask at once (masks: that
         mask and the region). The right camera sees none of the object left of x = d, so the mask there
         falls apart into regions and the largest may hold too little the right camera sees to be matched:
         endless:body frame 484, a walker leaving at the left border, its mask in regions of 1,166, 727 and
