@@ -3,6 +3,7 @@ border, another object or a nearer background cuts it, for tracker.pipeline's Si
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 from numpy.typing import NDArray
 
@@ -55,23 +56,13 @@ def partly_seen(b: Blob, others: list[tuple[Box, BoolA, float]], upright: bool,
     if hidden_below and upright:  # a person's hidden lower part stands under what is seen
         sx = 0.0
     solid, baseline_m = person
+    _, _, w, h = cv2.boundingRect(b.mask.view(np.uint8))  # the outline's extent (px)
     if upright and (left or right) and solid is not None:  # the rest above or below it
-        h = float(np.ptp(np.flatnonzero(b.mask.any(axis=1))) + 1)
-        sy = float(np.hypot(sy, solid.short_of_stature_px(h, b.disparity, baseline_m) / 12**0.5))
+        sy = float(np.hypot(sy, solid.short_of_stature_px(float(h), b.disparity, baseline_m) / 12**0.5))
     whole = (not (left or right) and ux == 0.0, not (top or bottom) and uy == 0.0)
     if upright and solid is not None:  # a person seen in part where no cut was found
-        rx, ry = _unseen_rest(b.mask, b.disparity, solid, baseline_m, (not whole[0], not whole[1]))
+        rx, ry = solid.unseen_rest_px(float(w), float(h), b.disparity, baseline_m, (not whole[0], not whole[1]))
         ux, uy = ux if rx is None else rx, uy if ry is None else ry
         whole = (whole[0] and rx is None, whole[1] and ry is None)
     cut = (float(np.sqrt(px * px + sx * sx + ux * ux)), float(np.sqrt(py * py + sy * sy + uy * uy)))
     return hidden_below, cut, whole
-
-
-def _unseen_rest(mask: BoolA, disparity: float, solid: SolidPrior, baseline_m: float, cut: tuple[bool, bool]
-                 ) -> tuple[float | None, float | None]:
-    """SolidPrior.unseen_rest_px for the outline's extent."""
-    m8 = mask.view(np.uint8)
-    cols, rows = np.flatnonzero(m8.any(axis=0)), np.flatnonzero(m8.any(axis=1))
-    if cols.size == 0:
-        return None, None
-    return solid.unseen_rest_px(float(np.ptp(cols) + 1), float(np.ptp(rows) + 1), disparity, baseline_m, cut)
