@@ -133,7 +133,20 @@ def grown_by_change(key: U8, bg: NDArray[np.float32], other_at_d: U8, other_at_b
     r_d = np.abs(k - other_at_d.astype(np.int16))
     r_bg = np.abs(k - other_at_bg.astype(np.int16))
     out = _grown_pixelwise(key, bg, obj, changed & (r_d <= eps) & (r_bg > r_d + margin), max_corr)
-    return _grown_by_parts(key, bg, out, changed, r_d <= eps, r_bg - r_d, margin, max_corr, at_depth=at_depth)
+    return _grown_by_parts(key, bg, out, changed, at_object_depth(r_d, r_bg, eps, at_depth), r_bg - r_d, margin,
+                           max_corr, at_depth=at_depth)
+
+
+def at_object_depth(r_d: NDArray[np.int16], r_bg: NDArray[np.int16], eps: int, at_depth: BoolA | None) -> BoolA:
+    """The pixels the other camera shows at the object's depth: |Γ - Θ_d| <= ε (r_d), or, where the
+    background's map lies at the object's own depth (`at_depth`, at_own_depth), |Γ - Θ_bg| <= ε (r_bg): the
+    map's disparity there is the object's depth as well, to within the depth-gap test, and a leg a little
+    nearer or farther than the body's centre matches at it rather than at d. endless:body frame 1332, a
+    walker's legs before a low wall at its depth: 49 % of them matched at d, 84 % lay over the wall, and
+    they stayed out (the centroid 20.4 px off the truth's, 3.8 px with them; elevation RMSE against the seen
+    surface 0.182 -> 0.153°)."""
+    at_d = r_d <= eps
+    return at_d if at_depth is None else np.asarray(at_d | (at_depth & (r_bg <= eps)))
 
 
 def _grown_pixelwise(key: U8, bg: NDArray[np.float32], obj: BoolA, own: BoolA, max_corr: float) -> BoolA:
@@ -169,8 +182,8 @@ def _grown_by_parts(key: U8, bg: NDArray[np.float32], obj: BoolA, changed: BoolA
     disparity is 5 px off its own). A part: the changed pixels not in `obj` that a closing (5 x 5) joins,
     as the temporal model leaves gaps of a few pixels where the object's grey passes for the background's;
     it joins where it lies within 8 px of `obj` or of a part joined before (up to 4 rounds: the next part
-    down a leg), most of it (min_share) is at the object's depth (`at_d`: |Γ - Θ_d| <=
-    ε), the other camera shows it at the object's disparity better than at the background's on the whole,
+    down a leg), most of it (min_share) is at the object's depth (`at_d`:
+    at_object_depth), the other camera shows it at the object's disparity better than at the background's on the whole,
     by more than `margin` grey levels a pixel (mean of gap = |Γ - Θ_bg| - |Γ - Θ_d|: uncovered background
     and a shadow on the ground match at the background's as well or better), and its texture is not the
     background's relit (texture_corr at most max_corr). at_depth, where the background's map lies at the
