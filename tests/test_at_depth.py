@@ -1,5 +1,5 @@
 """A tracked body's parts over a background at its own depth (tracker.growth.at_own_depth,
-tracker.verify.Verifier._at_depth): eq. (9) and the other camera alike see them as the background, the
+tracker.verify.Verifier.at_depth): eq. (9) and the other camera alike see them as the background, the
 temporal model sees them change. They join the outline, and they stay out of the ring its gain is taken on."""
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ def test_a_walkers_legs_before_a_wall_at_its_depth_join_its_outline(monkeypatch:
     # px, the walker at 20.4; the left key holds none of them, the model sees 1,348 of its 1,478 px change
     err, held, off = _target("endless:body", 1320)
     assert err < 5.0 and held > 1200 and off < 50  # 2.9 px, 1,350 px, 13 off when measured
-    monkeypatch.setattr(verify.Verifier, "_at_depth", lambda *a: None)
+    monkeypatch.setattr(verify.Verifier, "at_depth", lambda *a: None)
     err, held, _ = _target("endless:body", 1320)
     assert err > 15.0 and held < 1000  # 20.2 px, 887 px: the upper body alone
 
@@ -57,7 +57,7 @@ def test_where_a_walker_stood_while_the_background_was_learnt_no_part_lies_at_it
         if not keep:
             monkeypatch.setattr(verify, "without_uncovered", lambda parts, key, bg: parts)
         seen: list[int] = []
-        at_depth = verify.Verifier._at_depth
+        at_depth = verify.Verifier.at_depth
 
         def spy(self: verify.Verifier, frame, box, cm, model, d):  # type: ignore[no-untyped-def]
             out = at_depth(self, frame, box, cm, model, d)
@@ -65,7 +65,7 @@ def test_where_a_walker_stood_while_the_background_was_learnt_no_part_lies_at_it
                 seen.append(int(np.count_nonzero(out[:, : max(350 - box[0], 0)])))
             return out
 
-        monkeypatch.setattr(verify.Verifier, "_at_depth", spy)
+        monkeypatch.setattr(verify.Verifier, "at_depth", spy)
         sim = SimRig(STARTUP, seed=0)
         pipe = Pipeline(sim.rig)
         pipe.learn_background_from_stream(sim.step().frame)

@@ -24,7 +24,7 @@ def grow_tracked(rect: Rectifier, frame: StereoFrame, box: Box, cm: Corresponden
     pixels it may take, eps eq. (9)'s ε. Worked out over the
     candidates' bounding rectangle and 4 px about it only (what joins does so through them; the 7 x 7
     windows about them). at_depth: the box's pixels whose background lies at the body's own depth and that
-    changed (grown_by_change's; tracker.verify.Verifier._at_depth; None: no part joins so)."""
+    changed (grown_by_change's; tracker.verify.Verifier.at_depth; None: no part joins so)."""
     ys, xs = np.nonzero(changed & ~obj)
     if xs.size == 0:
         return obj

@@ -37,6 +37,7 @@ from numpy.typing import NDArray
 from tracker.boxes import stacked_joined
 from tracker.detect import Box, StereoSubtractor
 from tracker.frames import StereoFrame
+from tracker.growth import grow_tracked
 from tracker.masks import frame_gain, largest_region, temporal_outline, with_parts
 from tracker.one_camera import OneCameraConfig, coast_sigma_px, hidden_from_right, nearest_prediction
 from tracker.rectify import Rectifier
@@ -260,7 +261,7 @@ class TemporalDetector:
         x0, y0, x1, y1 = box
         key, b, d = frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1], dev[y0:y1, x0:x1]
         region = change_mask(key, b, d, g, eps) > 0
-        obj, gain, _ = temporal_outline(key, b, d, np.zeros_like(region), region, eps)
+        obj, gain, changed = temporal_outline(key, b, d, np.zeros_like(region), region, eps)
         if int(np.count_nonzero(obj)) < cfg.min_area_px:
             return None
         if texture_corr(key, b, obj) > cfg.max_texture_corr:
@@ -269,6 +270,8 @@ class TemporalDetector:
         radius = self.verifier.search_radius(hint)  # about a track's prediction: how far it can move
         fine = self._match(frame, box, obj, hint, radius, hint is not None)
         blob = None if fine is None else self._checked(frame, box, obj, gain, fine, hint, radius)
+        if blob is not None and hint is not None:
+            blob = self._grown(frame, box, blob, (bg, dev), changed)
         if blob is None and coast is not None:  # the left camera alone: every part of the body it sees
             return self._left_only(frame, box, with_parts(obj, region), gain, coast())
         return blob
@@ -306,6 +309,22 @@ class TemporalDetector:
         if not self._near(fine.disparity, d_med) and not self._right_sees(frame, box, obj, fine.disparity):
             return None
         return self._blob(box, obj, fine.disparity, fine.sigma, d_bg, fine.score, gain, False)
+
+    def _grown(self, frame: StereoFrame, box: Box, b: Blob, model: tuple[F32, F32], changed: BoolA) -> Blob:
+        """A tracked object's outline grown into the box's `changed` pixels that are its surface too
+        (growth.grow_tracked, as tracker.verify grows a tracked object's stereo outline; the temporal outline
+        keeps its largest region alone): where eq. (9) sees little of a walker before a low wall at its own
+        depth, the parts of its legs the model saw apart from the rest. Not a sliver (see
+        growth.grown_by_change)."""
+        if b.area < 4 * self.cfg.min_area_px:
+            return b
+        cm = self.sub.correspondence(0, frame.gimbal, box)
+        at = self.verifier.at_depth(frame, box, cm, model, b.disparity)
+        obj = grow_tracked(self.verifier.rect, frame, box, cm, model[0], b.mask, changed, b.disparity,
+                           self.sub.cfg.epsilon, at)
+        if int(np.count_nonzero(obj)) == b.area:
+            return b
+        return self._blob(box, obj, b.disparity, b.disparity_sigma, b.bg_disparity, b.score, b.gain, b.one_camera)
 
     def _left_only(self, frame: StereoFrame, box: Box, obj: BoolA, gain: float, coast: F64) -> Blob | None:
         """A region that matches at no disparity as a tracked object seen by the left camera alone: of the

@@ -331,7 +331,7 @@ class Verifier(RegionMatcher):
         hedge in 49 frames). The outline is the part and what the right key's region adds to it: through
         the right key's pixels, a region the left key alone sees (where a walker stood while the background
         was learnt: the temporal model still holds it) joined the outline and made it a false target."""
-        at_depth = self._at_depth(frame, box, cm, model, d_hint)  # left out of the outlines' gain, and grown into
+        at_depth = self.at_depth(frame, box, cm, model, d_hint)  # left out of the outlines' gain, and grown into
         matched = self._temporal_outline(frame, box, model, None, m_left & free, found, at_depth)[0]
         m_right = self.right_key_at(frame, box, d_hint)
         wide, gain, changed = self._temporal_outline(frame, box, model, None, (m_left | m_right) & free, found,
@@ -346,7 +346,7 @@ class Verifier(RegionMatcher):
             wide = own_pixels(self.rect, frame, box, wide, d_hint, around, self.cfg.min_area_px)
         return wide, matched, gain, changed
 
-    def _at_depth(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap, model: tuple[F32, F32], d: float
+    def at_depth(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap, model: tuple[F32, F32], d: float
                   ) -> BoolA | None:
         """growth.at_own_depth over the box (the background's map at the body's depth d, px) where the pixel
         changed at the frame's global gain (masks.frame_gain, as tracker.temporal takes it): most likely a
