@@ -157,8 +157,9 @@ def _without_rims(blobs: list[Blob]) -> list[Blob]:
 def _unclaimed(coasting: Callable[[], F64], blobs: list[Blob], gate_px: float) -> F64:
     """The rows of `coasting()` (MultiTracker.coasting) whose predicted position no object found already
     holds in its box, nor lies within `gate_px` of a one-camera object's centroid (it continued that track):
-    one object per track."""
+    one object per track. A part only (Blob.part_only) claims none: the pipeline keeps it only if it joins."""
     coast = coasting()
+    blobs = [b for b in blobs if not b.part_only]
     if not blobs:
         return coast
     keep = [not any(b.box[0] <= c[0] < b.box[2] and b.box[1] <= c[1] < b.box[3]
@@ -202,7 +203,7 @@ class TemporalDetector:
             fg[~learnt[::s]] = 0  # no deviation known there yet
         out = list(found)
         for box in self._groups(fg):
-            covered = [b for b in out if _overlap(b.box, box)]
+            covered = [b for b in out if _overlap(b.box, box) and not b.part_only]  # a part only may not join
             if covered and not all(self._near_background(b) for b in covered):
                 continue  # objects well clear of their background: their stereo outline holds
             claims = None if coast is None else partial(_unclaimed, coast, out, self.one_cfg.gate_px)

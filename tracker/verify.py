@@ -39,6 +39,7 @@ from tracker.region_match import RegionMatcher
 from tracker.regions import (
     at_left_border,
     background_disparity,
+    beyond_occluder_hints,
     border_hints,
     hints_around,
     in_front,
@@ -128,7 +129,9 @@ class Verifier(RegionMatcher):
                 got, m_left = self._every_region_at_border(frame, box, cm, (m_raw, m_left), hint, free, around,
                                                            found)
             if got is None and hint is None and not new_later:  # no track's, and not found (or too small) anew
-                got = next((g for d in border_hints(hints, m_left, box) if (g := self._verify_region(
+                beyond = border_hints(hints, m_left, box) or beyond_occluder_hints(
+                    hints, m_left, box, cm, cfg.min_depth_gap, cfg.min_disparity_gap_px)
+                got = next((g for d in beyond if (g := self._verify_region(
                     frame, box, cm, m_left, d, free, around, found)) is not None), None)
                 got = None if got is None else (replace(got[0], part_only=True), got[1])
             if got is not None and hint is None and part_of is None:  # found anew: a track's object after all?
