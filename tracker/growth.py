@@ -187,8 +187,8 @@ def _grown_by_parts(key: U8, bg: NDArray[np.float32], obj: BoolA, changed: BoolA
     shaded far leg 10-20 px below the outline's: the centroid 8.2 -> 5.1 px off; elevation RMSE against the
     seen surface walk, illumination and foliage 0.134, 0.129 and 0.132 -> 0.117, 0.114 and 0.116°; a thing
     beside the outline stays out), most of it (min_share) is at the object's depth (`at_d`:
-    at_object_depth), the other camera shows it at the object's disparity better than at the background's on the whole,
-    by more than `margin` grey levels a pixel (mean of gap = |Γ - Θ_bg| - |Γ - Θ_d|: uncovered background
+    at_object_depth), the other camera shows it at the object's disparity better than at the background's on
+    the whole, by more than `margin` grey levels a pixel (mean of gap = |Γ - Θ_bg| - |Γ - Θ_d|: uncovered background
     and a shadow on the ground match at the background's as well or better), and its texture is not the
     background's relit (texture_corr at most max_corr). at_depth, where the background's map lies at the
     object's depth (None: nowhere), stands in for the margin where most of the part (min_share) lies over

@@ -350,7 +350,7 @@ class Verifier(RegionMatcher):
         return wide, matched, gain, changed
 
     def at_depth(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap, model: tuple[F32, F32], d: float
-                  ) -> BoolA | None:
+                 ) -> BoolA | None:
         """growth.at_own_depth over the box (the background's map at the body's depth d, px) where the pixel
         changed at the frame's global gain (masks.frame_gain, as tracker.temporal takes it): most likely a
         part of the body eq. (9) missed. The outline's own gain is taken on a ring about the region, so
