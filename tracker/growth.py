@@ -18,15 +18,16 @@ BoolA = NDArray[np.bool_]
 
 
 def grow_tracked(rect: Rectifier, frame: StereoFrame, box: Box, cm: CorrespondenceMap, bg: F32, obj: BoolA,
-                 changed: BoolA, d: float, eps: int, at_depth: BoolA | None = None) -> BoolA:
+                 changed: BoolA, d: float, eps: int, min_area_px: int, at_depth: BoolA | None = None) -> BoolA:
     """`grown_by_change` of an outline `obj` over the raw-left box at the body's disparity d (px): cm is the
     box's correspondence map (eq. 9's), bg the temporal background B (full image), changed the box's changed
     pixels it may take, eps eq. (9)'s ε. Worked out over the
     candidates' bounding rectangle and 4 px about it only (what joins does so through them; the 7 x 7
     windows about them). at_depth: the box's pixels whose background lies at the body's own depth and that
-    changed (grown_by_change's; tracker.verify.Verifier.at_depth; None: no part joins so)."""
+    changed (grown_by_change's; tracker.verify.Verifier.at_depth; None: no part joins so). A sliver (under
+    4 min_area_px pixels) is kept as it is: see grown_by_change."""
     ys, xs = np.nonzero(changed & ~obj)
-    if xs.size == 0:
+    if xs.size == 0 or int(np.count_nonzero(obj)) < 4 * min_area_px:
         return obj
     h, w = obj.shape
     m = 4

@@ -11,7 +11,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tracker.bgdepth import CorrespondenceMap
-from tracker.visibility import right_shadow
+from tracker.visibility import occluded
 
 F64 = NDArray[np.float64]
 U8 = NDArray[np.uint8]
@@ -169,15 +169,13 @@ def beyond_occluder_hints(hints: F64 | None, region: BoolA, box: Box, cm: Corres
     bx, by, bw, bh = cv2.boundingRect(region.view(np.uint8))
     rows = slice(by, by + bh)
     y0, y1, x0, x1 = box[1] + by, box[1] + by + bh - 1, box[0] + bx, box[0] + bx + bw - 1
+    disp, valid = cm.disparity[rows], cm.valid[rows]
     out = []
     for h in hints:
         d = float(h[2])
         if not y0 <= h[1] <= y1 or x0 <= h[0] <= x1:
             continue
         cols = slice(bx + bw, bx + bw + strip_px) if h[0] > x1 else slice(max(bx - strip_px, 0), bx)
-        disp, valid = cm.disparity[rows], cm.valid[rows]
-        hidden = right_shadow(valid & (disp > d * (1.0 + gap) + gap_px), disp, d)[:, cols]
-        n = int(np.count_nonzero(valid[:, cols]))
-        if n and int(np.count_nonzero(hidden & valid[:, cols])) >= share * n:
+        if occluded(disp, valid, d, gap, gap_px, share, cols):
             out.append((abs(float(h[0]) - (x1 if h[0] > x1 else x0)), d))
     return [d for _, d in sorted(out)]

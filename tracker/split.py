@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 from tracker.frames import StereoFrame
 from tracker.rectify import Rectifier
 from tracker.regions import mask_centroid
-from tracker.visibility import right_shadow
+from tracker.visibility import occluded
 
 if TYPE_CHECKING:
     from tracker.results import Blob
@@ -161,15 +161,10 @@ def occluded_gap(a: Blob, b: Blob, bg_disparity: Callable[[Box], tuple[F32, Bool
     width = max(a.box[2], b.box[2]) - min(a.box[0], b.box[0])
     if bx0 <= ax1 or bx0 - ax1 > OCCLUDED_GAP_REL * width or y1 - y0 < 0.5 * min(ra.size, rb.size):
         return False
-    disp, valid = bg_disparity((ax1, y0, bx0, y1))
-    n = int(np.count_nonzero(valid))
-    if n == 0:
-        return False
     # the occluder and, right of it, the columns the right camera cannot see the body in (d_near - d px
     # wide: verification cannot find it there either): occlusion:body's start-up, the car's two sides of
     # the post 31 px apart, 57 % of the gap the post itself, 71 % with its shadow
-    hidden = right_shadow(valid & (disp > d * (1.0 + min_gap) + 0.5), disp, d)
-    return int(np.count_nonzero(hidden & valid)) >= OCCLUDER_SHARE * n
+    return occluded(*bg_disparity((ax1, y0, bx0, y1)), d, min_gap, 0.5, OCCLUDER_SHARE)
 
 
 _TOUCH = np.ones((5, 5), np.uint8)  # within 2 px of the nearer background

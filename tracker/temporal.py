@@ -315,14 +315,11 @@ class TemporalDetector:
         """A tracked object's outline grown into the box's `changed` pixels that are its surface too
         (growth.grow_tracked, as tracker.verify grows a tracked object's stereo outline; the temporal outline
         keeps its largest region alone): where eq. (9) sees little of a walker before a low wall at its own
-        depth, the parts of its legs the model saw apart from the rest. Not a sliver (see
-        growth.grown_by_change)."""
-        if b.area < 4 * self.cfg.min_area_px:
-            return b
+        depth, the parts of its legs the model saw apart from the rest."""
         cm = self.sub.correspondence(0, frame.gimbal, box)
         at = self.verifier.at_depth(frame, box, cm, model, b.disparity)
         obj = grow_tracked(self.verifier.rect, frame, box, cm, model[0], b.mask, changed, b.disparity,
-                           self.sub.cfg.epsilon, at)
+                           self.sub.cfg.epsilon, self.cfg.min_area_px, at)
         if int(np.count_nonzero(obj)) == b.area:
             return b
         return self._blob(box, obj, b.disparity, b.disparity_sigma, b.bg_disparity, b.score, b.gain, b.one_camera)

@@ -341,9 +341,8 @@ class Verifier(RegionMatcher):
                                                      at_depth)
         if matched.any():  # what the right key adds to it (joined through it, a ghost the left key alone
             wide = with_head(matched | (wide & m_right))  # sees would be taken in)
-        if int(np.count_nonzero(wide)) >= 4 * self.cfg.min_area_px:  # not a sliver: see growth.grown_by_change
-            wide = grow_tracked(self.rect, frame, box, cm, model[0], wide, changed & free, d_hint, self.cfg.epsilon,
-                                at_depth)
+        wide = grow_tracked(self.rect, frame, box, cm, model[0], wide, changed & free, d_hint, self.cfg.epsilon,
+                            self.cfg.min_area_px, at_depth)
         if len(around) > 1:  # other tracks predicted about the region: keep the pixels at this one's d
             matched = own_pixels(self.rect, frame, box, matched, d_hint, around, self.cfg.min_area_px)
             wide = own_pixels(self.rect, frame, box, wide, d_hint, around, self.cfg.min_area_px)

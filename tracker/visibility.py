@@ -263,6 +263,21 @@ def right_shadow(nearer: BoolA, bg_disparity: F32, disparity: float) -> BoolA:
     return out
 
 
+def occluded(disp: F32, valid: BoolA, disparity: float, gap: float, gap_px: float, share: float,
+             cols: slice = slice(None)) -> bool:
+    """Whether at least `share` of the known background (disp px, where valid) in columns `cols` is nearer
+    than a target at `disparity` px by the depth-gap test turned round (d_bg > d (1 + gap) + gap_px) or in
+    that nearer background's shadow for the right camera (right_shadow, cast from anywhere on the rows
+    given); False where no background is known there. What hides a body's part between two seen pieces
+    (split.occluded_gap) or beyond one (regions.beyond_occluder_hints)."""
+    known = valid[:, cols]
+    n = int(np.count_nonzero(known))
+    if n == 0:
+        return False
+    hidden = right_shadow(valid & (disp > disparity * (1.0 + gap) + gap_px), disp, disparity)[:, cols]
+    return int(np.count_nonzero(hidden & known)) >= share * n
+
+
 def padded(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, int], pad: int = 2, left: int = 2,
            below: int = 2) -> tuple[BoolA, tuple[int, int, int, int]]:
     """The mask and its box grown by `pad` px on the top and right, by `left` px on the left and `below`
