@@ -161,13 +161,12 @@ def changed_holes_filled(mask: BoolA, changed: BoolA, share: float = 0.25, small
     A walker's leg whose shade and texture match the ground it covers passes both eq. (9) and the temporal
     model as background in patches (walk:body frame 288: 1,340 of the body's pixels missed, most in its
     lower legs; the centroid 4.5 px off). Over walk:body's outlines the holes under 1 % of the outline's
-    area held 12,781 px, 12,060 of them the body's; on endless:body, whose walkers are far and small,
-    1,620 px and 607 (the rest background seen between an arm and the torso). Filled, `tmeye eval --all`
-    (2026-12-05) gave azimuth / elevation RMSE against the seen surface walk:body 0.054 -> 0.050° / 0.117
-    -> 0.104°, illumination 0.051 -> 0.048 / 0.114 -> 0.098, foliage 0.052 -> 0.050 / 0.116 -> 0.111,
-    endless 0.0313 -> 0.0313 / 0.144 -> 0.142. Larger holes with no change are mostly the background
-    between a walker's legs (endless:body: 27,678 px in holes over 3 % of their outlines, 1,228 of them a
-    body's) and stay."""
+    area held 12,781 px, 12,060 of them the body's; on endless:body, whose walkers are far and small, 1,620
+    px and 607. Filled, `tmeye eval --all` (2026-12-05) gave azimuth / elevation RMSE against the seen
+    surface walk:body 0.054 -> 0.050° / 0.117 -> 0.104°, illumination 0.051 -> 0.048 / 0.114 -> 0.098,
+    foliage 0.052 -> 0.050 / 0.116 -> 0.111, endless 0.0313 -> 0.0313 / 0.144 -> 0.142. Larger holes with no
+    change are mostly the background between a walker's legs (endless:body: 27,678 px in holes over 3 % of
+    their outlines, 1,228 of them a body's) and stay."""
     contours = _outer_contours(mask, False)
     if not contours:
         return mask
