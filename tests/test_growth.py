@@ -226,3 +226,13 @@ def test_on_the_simulator_a_far_legs_patches_below_the_outline_join(monkeypatch:
     monkeypatch.setattr(growth, "_FAR_REACH", growth._REACH)
     got = walker_errors("walk:body", 10)
     assert len(got) == 1 and got[0] > 7.0
+
+
+def test_an_outline_may_grow_only_when_no_sliver_and_some_change_lies_outside_it() -> None:
+    obj = np.zeros((40, 40), bool)
+    obj[10:30, 10:30] = True  # 400 px
+    changed = np.zeros_like(obj)
+    changed[12:18, 30:34] = True
+    assert growth.can_grow(obj, changed, min_area_px=64)  # 400 >= 4 x 64, change beside it
+    assert not growth.can_grow(obj, changed, min_area_px=101)  # 400 < 4 x 101: a sliver
+    assert not growth.can_grow(obj, changed & obj, min_area_px=64)  # no change outside it

@@ -26,9 +26,9 @@ def grow_tracked(rect: Rectifier, frame: StereoFrame, box: Box, cm: Corresponden
     windows about them). at_depth: the box's pixels whose background lies at the body's own depth and that
     changed (grown_by_change's; tracker.verify.Verifier.at_depth; None: no part joins so). A sliver (under
     4 min_area_px pixels) is kept as it is: see grown_by_change."""
-    ys, xs = np.nonzero(changed & ~obj)
-    if xs.size == 0 or int(np.count_nonzero(obj)) < 4 * min_area_px:
+    if not can_grow(obj, changed, min_area_px):
         return obj
+    ys, xs = np.nonzero(changed & ~obj)
     h, w = obj.shape
     m = 4
     sy0, sy1 = max(int(ys.min()) - m, 0), min(int(ys.max()) + m + 1, h)
@@ -41,6 +41,13 @@ def grow_tracked(rect: Rectifier, frame: StereoFrame, box: Box, cm: Corresponden
                                             obj[sy0:sy1, sx0:sx1], changed[sy0:sy1, sx0:sx1], eps,
                                             at_depth=None if at_depth is None else at_depth[sy0:sy1, sx0:sx1])
     return out
+
+
+def can_grow(obj: BoolA, changed: BoolA, min_area_px: int) -> bool:
+    """Whether grow_tracked may add to the outline `obj` (bool, box-sized): it is no sliver (at least 4
+    min_area_px pixels) and some `changed` pixel lies outside it. Callers ask first to spare the box's
+    correspondence map and at-depth pixels when it may not."""
+    return int(np.count_nonzero(obj)) >= 4 * min_area_px and bool((changed & ~obj).any())
 
 
 def at_own_depth(cm: CorrespondenceMap, d: float, gap: float, gap_px: float) -> BoolA:

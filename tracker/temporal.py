@@ -37,7 +37,7 @@ from numpy.typing import NDArray
 from tracker.boxes import stacked_joined
 from tracker.detect import Box, StereoSubtractor
 from tracker.frames import StereoFrame
-from tracker.growth import grow_tracked
+from tracker.growth import can_grow, grow_tracked
 from tracker.masks import frame_gain, largest_region, temporal_outline, with_parts
 from tracker.one_camera import OneCameraConfig, coast_sigma_px, hidden_from_right, nearest_prediction
 from tracker.rectify import Rectifier
@@ -316,6 +316,8 @@ class TemporalDetector:
         (growth.grow_tracked, as tracker.verify grows a tracked object's stereo outline; the temporal outline
         keeps its largest region alone): where eq. (9) sees little of a walker before a low wall at its own
         depth, the parts of its legs the model saw apart from the rest."""
+        if not can_grow(b.mask, changed, self.cfg.min_area_px):
+            return b
         cm = self.sub.correspondence(0, frame.gimbal, box)
         at = self.verifier.at_depth(frame, box, cm, model, b.disparity)
         obj = grow_tracked(self.verifier.rect, frame, box, cm, model[0], b.mask, changed, b.disparity,
