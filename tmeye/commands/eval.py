@@ -79,6 +79,38 @@ def scenario_name(name: str) -> str:
     return name if suffix else name + BODY_SUFFIX
 
 
+def _instead(args: argparse.Namespace) -> int:
+    """--matching, --near-wall, --startup or --exposure: an evaluation of its own instead of a scenario's."""
+    if args.matching:
+        if args.frames_out:
+            raise UserError("--frames-out writes the frames of one tracking scenario: give it with --scenario NAME")
+        emit(_matching(args.matching), args.json)
+        return 0
+    if args.scenario or args.rig or args.epsilon is not None or args.alarms or args.all or args.frames_out or (
+            args.near_wall + args.startup + args.exposure > 1):
+        raise UserError("--near-wall, --startup and --exposure run their own scenes: give one, and only --seed, "
+                        "--frames and --json with it")
+    if args.frames is not None and args.frames < 1:
+        raise UserError(f"--frames must be at least 1, got {args.frames}")
+    emit(_near_wall(args) if args.near_wall else _startup(args) if args.startup else _exposure(args), args.json)
+    return 0
+
+
+def _alarms(args: argparse.Namespace) -> int:
+    """--alarms: the alarm rules on the endless scene against its true target positions."""
+    if args.scenario or args.frames is not None or args.rig or args.epsilon is not None or args.all or \
+            args.frames_out:
+        raise UserError("--alarms runs the endless scene: give only --minutes, --seed and --json with it")
+    if not 0 < args.minutes <= 600:
+        raise UserError(f"--minutes must be above 0 and at most 600, got {args.minutes:g}")
+    from tmeye.alarm_eval import evaluate_alarms
+
+    if args.start < 0:
+        raise UserError(f"--start must be at least 0, got {args.start:g}")
+    emit(evaluate_alarms(args.minutes, args.seed, progress=Progress("eval alarms"), start_s=args.start), True)
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
     names = _scenarios()
     if not 1 <= args.edge_samples <= 8:
@@ -86,36 +118,14 @@ def run(args: argparse.Namespace) -> int:
     if args.edge_samples != 1 and not (args.scenario or args.all) or args.edge_samples != 1 and (
             args.matching or args.near_wall or args.startup or args.exposure or args.alarms):
         raise UserError("--edge-samples goes with --scenario NAME or --all")
-    if args.matching:
-        if args.frames_out:
-            raise UserError("--frames-out writes the frames of one tracking scenario: give it with --scenario NAME")
-        emit(_matching(args.matching), args.json)
-        return 0
-    if args.near_wall or args.startup or args.exposure:
-        if args.scenario or args.rig or args.epsilon is not None or args.alarms or args.all or args.frames_out or (
-                args.near_wall + args.startup + args.exposure > 1):
-            raise UserError("--near-wall, --startup and --exposure run their own scenes: give one, and only --seed, "
-                            "--frames and --json with it")
-        if args.frames is not None and args.frames < 1:
-            raise UserError(f"--frames must be at least 1, got {args.frames}")
-        emit(_near_wall(args) if args.near_wall else _startup(args) if args.startup else _exposure(args), args.json)
-        return 0
+    if args.matching or args.near_wall or args.startup or args.exposure:
+        return _instead(args)
     if args.list:
         for name, desc in names.items():
             print(f"{name:14s} {desc}")
         return 0
     if args.alarms:
-        if args.scenario or args.frames is not None or args.rig or args.epsilon is not None or args.all or \
-                args.frames_out:
-            raise UserError("--alarms runs the endless scene: give only --minutes, --seed and --json with it")
-        if not 0 < args.minutes <= 600:
-            raise UserError(f"--minutes must be above 0 and at most 600, got {args.minutes:g}")
-        from tmeye.alarm_eval import evaluate_alarms
-
-        if args.start < 0:
-            raise UserError(f"--start must be at least 0, got {args.start:g}")
-        emit(evaluate_alarms(args.minutes, args.seed, progress=Progress("eval alarms"), start_s=args.start), True)
-        return 0
+        return _alarms(args)
     if args.frames is not None and args.frames < 1:
         raise UserError(f"--frames must be at least 1, got {args.frames}")
     if args.frames_out and (args.all or not args.scenario or scenario_name(args.scenario) == "calibration"):
