@@ -84,6 +84,19 @@ class Localization:
     sigma_d_px: float | None = None
 
 
+def fused(a: tuple[float, float], b: tuple[float, float]) -> tuple[float, float]:
+    """Two measurements (value, variance) of one quantity fused, inverse-variance weighted, the fused
+    variance scaled by the Particle Data Group's factor S² = χ² / (N - 1) where that exceeds 1 (χ² = (a - b)²
+    / (σ_a² + σ_b²), N = 2): measurements that disagree beyond their 1-σ say their 1-σ are too small.
+    An upright body placed from its top and from its centroid while its feet are inferred (pan:body,
+    replayed on per-frame rows: elevation RMSE 0.283 / 0.358 deg each, fused 0.225 deg; within 1σ 0.70, NEES
+    0.95 with the factor, 0.65 / 1.60 without)."""
+    (ya, va), (yb, vb) = a, b
+    wa, wb = 1.0 / va, 1.0 / vb
+    chi2 = (ya - yb) ** 2 / (va + vb)
+    return (wa * ya + wb * yb) / (wa + wb), max(chi2, 1.0) / (wa + wb)
+
+
 class Localizer:
     """Rectified centroid + disparity -> 3-D point and spherical coordinates with uncertainties: the image
     noise of the centroid and of the disparity, the calibration's own (the rig's `sigma`) and, with a
@@ -105,7 +118,7 @@ class Localizer:
                extent_px: tuple[float, float] | None = None, rim_px: tuple[float, float] | None = None,
                in_frame: bool = True, top_px: float | None = None, swing: float | None = None,
                upright: bool | None = None, stature: tuple[float, float] | None = None,
-               gait: float | None = None, warped: bool = False) -> Localization:
+               gait: float | None = None, warped: bool = False, top_fused: bool = False) -> Localization:
         """extra_px: the centroid's further 1-σ (px) along x and y, where the target is seen only in part
         (tracker.visibility). extent_px: the target's seen width and height (px), for the SolidPrior.
         rim_px: the outline's 1-σ (px, x and y) from its rim's contrast (tracker.rim_contrast), in place of
@@ -120,11 +133,14 @@ class Localizer:
         1-σ that the target's track measured, for an upright body placed from its top (combined with the
         SolidPrior's height_m ± height_sigma_m); None: the prior's alone. gait: how fully an upright body
         walks (tracker.heading; None: unknown, taken as walking). warped: the cameras move, so the outline is
-        drawn by warping (an upright body's y 1-σ is then SolidPrior.upright_warped_sigma's)."""
+        drawn by warping (an upright body's y 1-σ is then SolidPrior.upright_warped_sigma's). top_fused: the
+        outline's bottom was inferred, not seen (tracker.results.Blob.bottom_inferred): an upright body's
+        centre from its top (top_px) and the one from its centroid and shift are fused (`fused`)."""
         x, y = float(centroid_rect[0]), float(centroid_rect[1])
         X_meas = self.rect.rect_to_rig(x, y, disparity)  # eq. (2)
         X_rig = X_meas
         from_top = None
+        y_centroid = y  # an upright body's centre's y from its centroid, where fused with the top's
         if upright is None:
             upright = self.solid is not None and extent_px is not None and self.solid.upright(*extent_px)
         behind = None  # a solid body's centre's depth behind its face and its 1-σ (px at the face's depth)
@@ -132,13 +148,13 @@ class Localizer:
             behind = self.solid.behind_face_px(*extent_px, upright=upright)
             if upright:
                 behind = self.solid.seen_in_part(behind, extent_px[1], disparity, self.rect.b)
+                if in_frame:  # a person's volume centre above its silhouette's
+                    y_centroid = y - self.solid.shift_up(swing) * extent_px[1]
                 if top_px is not None:
                     from_top = self._below_top(top_px, disparity, behind[0], stature)
-                    y = from_top[0]
-                elif in_frame:
-                    y -= self.solid.shift_up(swing) * extent_px[1]  # a person's volume centre above its silhouette's
+                y = y_centroid if from_top is None else from_top[0]
                 X_rig = self.rect.rect_to_rig(x, y, disparity)
-        J = self.rect.rig_to_rect_jacobian(x, y, disparity)
+        top_fused = top_fused and from_top is not None
         s_c = 0.0 if self.centroid_sigma_px is None else max(self.centroid_sigma_px, 0.5 / np.sqrt(max(area, 1)))
         cal = self.rect.rig.sigma  # the calibration's own uncertainty (tracker.calib_sigma)
         (s_cx, s_cy), s_dcal = cal.principal_px, cal.disparity_px * self.rect.f / float(self.rect.rig.left.K[0, 0])
@@ -148,16 +164,24 @@ class Localizer:
             s_rim = self.solid.rim_sigma_px / np.sqrt(2.0)  # the outline's sides on a curved, shaded rim
             rx, ry = (s_rim, s_rim) if rim_px is None else rim_px
             w, h = extent_px
-            whole = gait if from_top is None else None  # the still share: of standing bodies seen whole
+            whole = gait if from_top is None or top_fused else None  # the still share: of standing bodies seen whole
             s_up = self.solid.upright_y_sigma(h, whole, warped) if upright else 0.0
             if upright:  # x: its limbs and, while the cameras move (no rim contrast), the rim too
                 S[0, 0] += self.solid.upright_x_var(h, swing, whole) + (rx**2 if rim_px is None else 0.0)
             else:  # x: the rim
                 S[0, 0] += rx**2
-            if from_top is not None:  # y: the top's own edge and the height's share, not what is hidden
-                S[1, 1] = s_c**2 + s_cy**2 + self.solid.rim_sigma_px**2 + from_top[1] ** 2
+            # y from the centroid: max(extra, upright) and the rim; from the top: the top's own edge and the
+            # height's share, not what is hidden
+            v_centroid = extra_px[1] ** 2 + ry**2 + max(s_up**2 - extra_px[1] ** 2, 0.0)
+            if from_top is not None:
+                v_top = self.solid.rim_sigma_px**2 + from_top[1] ** 2
+                if top_fused:  # the bottom inferred: both, eq. (1-2) at the fused y
+                    y, v_top = fused((from_top[0], v_top), (y_centroid, v_centroid))
+                    X_rig = self.rect.rect_to_rig(x, y, disparity)
+                S[1, 1] = s_c**2 + s_cy**2 + v_top
             else:
-                S[1, 1] += ry**2 + max(s_up**2 - extra_px[1] ** 2, 0.0)  # y: max(extra, upright)
+                S[1, 1] = s_c**2 + s_cy**2 + v_centroid
+        J = self.rect.rig_to_rect_jacobian(x, y, disparity)
         cov_rig = J @ S @ J.T + cal.scale_rel**2 * np.outer(X_rig, X_rig)  # f·b off by ε: X -> (1 + ε) X
         if behind is not None:
             X_meas = self._behind_face(X_meas, cov_rig, behind)[0]

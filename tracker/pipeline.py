@@ -220,14 +220,15 @@ class Pipeline:
         cx = with_gap_x(float(np.hypot(terms.centroid_px[0], kx)), terms.gap_x_px, self.localizer.solid, w, h)
         cy = float(np.hypot(terms.centroid_px[1], ky))
         in_frame = b.box[1] > 0 and b.box[3] < self.rig.left.size[1]  # its box reaches neither top nor bottom
-        top = self._top_px(b) if terms.hidden_below and in_frame else None  # a body seen over what hides it
+        fuse = b.bottom_inferred and not terms.hidden_below  # its feet inferred: from its top and its centroid
+        top = self._top_px(b) if (terms.hidden_below or fuse) and in_frame else None  # seen over what hides it
         swing, gait = self.headings.shares(track_id, frame.index, self.localizer.origin)
         centre = b.centroid_rect + self.rect.shift_to_rect(b.centroid_raw, terms.rim_shift_px)  # faint bands undone
         loc = self.localizer.locate(centre, b.disparity, max(b.disparity_sigma, terms.disparity_px),
                                     b.area, frame.gimbal, (cx, float(np.hypot(cy, jump))), (float(w), float(h)),
                                     terms.rim_px, in_frame, top, swing, True if terms.known_person else None,
                                     None if top is None else self.extents.stature_m(track_id, self.rect.b, b.disparity),
-                                    gait, self.subtractor.left_background(frame.gimbal) is None)
+                                    gait, self.subtractor.left_background(frame.gimbal) is None, fuse)
         self.headings.add(track_id, frame.index, frame.t, loc.world)
         return loc
 

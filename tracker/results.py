@@ -51,6 +51,7 @@ class Blob:
     one_camera: bool = False
     parts: tuple[PartFit, ...] = ()
     part_only: bool = False  # verified at the disparity of a track beyond it (tracker.regions.border_hints)
+    bottom_inferred: bool = False  # its feet filled where eq. (9) cannot see them (bottom_edge.feet_at_ground_depth)
 
 
 @dataclass(frozen=True)

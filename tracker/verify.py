@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tracker.bgdepth import CorrespondenceMap
+from tracker.bottom_edge import feet_at_ground_depth
 from tracker.detect import Box, StereoSubtractor
 from tracker.frames import StereoFrame
 from tracker.growth import at_own_depth, grow_tracked, without_uncovered
@@ -236,7 +237,7 @@ class Verifier(RegionMatcher):
         cfg = self.cfg
         around = around or []
         x0, y0, x1, y1 = box
-        gain, changed, matched = 1.0, None, None
+        gain, changed, matched, inferred = 1.0, None, None, False
         model = self.sub.left_background(frame.gimbal)
         if model is not None and d_hint is not None:  # a tracked object, cameras still
             obj, matched, gain, changed = self._tracked_outline(frame, box, cm, model, m_left, d_hint, free,
@@ -244,10 +245,10 @@ class Verifier(RegionMatcher):
             matched, d0 = self.seen_by_right(frame, box, seen_changed(matched, changed, m_left), d_hint, found), d_hint
         else:
             # a new object, or the cameras move: verification by warping in both directions
-            stereo = self._outline_stereo(frame, box, m_left, d_hint)
+            stereo = self._outline_stereo(frame, box, cm, m_left, d_hint)
             if stereo is None:
                 return None
-            obj, either, d0 = stereo
+            obj, either, d0, inferred = stereo
             if model is not None:  # cameras still: the temporal model draws the exact outline
                 obj, gain, changed = self._temporal_outline(frame, box, model, obj, either & free, found)
         radius, tracked = self.search_radius(d_hint), d_hint is not None
@@ -281,7 +282,7 @@ class Verifier(RegionMatcher):
         # eq. (10) in rectified coordinates, pixels weighted by their area: Σ a x / Σ a, Σ a y / Σ a
         sx, sy, sa, _ = cv2.mean(self.rect.area_moments[y0:y1, x0:x1], mask=m8)
         return Blob(box, obj, area, c_raw, np.array([sx / sa, sy / sa]), fine.disparity, fine.sigma, d_bg,
-                    fine.score, gain), changed
+                    fine.score, gain, bottom_inferred=inferred), changed
 
     @staticmethod
     def _changed_at_depth(tracked: bool, masks: tuple[BoolA, BoolA | None], ahead: float) -> bool:
@@ -382,19 +383,25 @@ class Verifier(RegionMatcher):
         return temporal_outline(frame.left[y0:y1, x0:x1], bg[y0:y1, x0:x1], dev[y0:y1, x0:x1],
                                 np.zeros_like(region) if core is None else core, region, self.cfg.epsilon, taken)
 
-    def _outline_stereo(self, frame: StereoFrame, box: Box, m_left: BoolA,
-                        d_hint: float | None) -> tuple[BoolA, BoolA, float] | None:
+    def _outline_stereo(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap, m_left: BoolA,
+                        d_hint: float | None) -> tuple[BoolA, BoolA, float, bool] | None:
         """The left-key mask intersected with the right-key mask warped at the object's disparity: the
-        occlusion shadows of both keys drop out (verification by warping in both directions).
-        Returns that mask, the union of the two masks, and the disparity used (the track's prediction,
-        or for a new object a search over the whole range)."""
+        occlusion shadows of both keys drop out (verification by warping in both directions). While the
+        cameras move (no temporal model to draw the outline after), a head past the neck's gap is kept
+        (with_head) and the feet eq. (9) cannot see against the ground are filled (feet_at_ground_depth).
+        Returns that mask, the union of the two masks, the disparity used (the track's prediction, or for a
+        new object a search over the whole range) and whether the feet were filled (Blob.bottom_inferred)."""
         d_hint = self._coarse_disparity(frame, box, m_left, d_hint)
         if d_hint is None:
             return None
         m_right = self.right_key_at(frame, box, d_hint)
-        obj = largest_component(m_left & m_right)
+        obj, inferred = largest_component(m_left & m_right), False
+        if self.sub.left_background(frame.gimbal) is None:
+            head = with_head(m_left & m_right)
+            feet = feet_at_ground_depth(head, m_left | m_right, cm.disparity, cm.valid, d_hint)
+            obj, inferred = with_head(feet), feet is not head
         if int(np.count_nonzero(obj)) < self.cfg.min_area_px:
             return None
         # the rest of the object: where the right key sees it at this disparity, or next to the solid
         near = cv2.dilate(obj.astype(np.uint8), NEAR) > 0
-        return obj, m_right | (m_left & near), d_hint
+        return obj, m_right | (m_left & near), d_hint, inferred
