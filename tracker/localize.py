@@ -138,7 +138,6 @@ class Localizer:
         centre from its top (top_px) and the one from its centroid and shift are fused (`fused`)."""
         x, y = float(centroid_rect[0]), float(centroid_rect[1])
         X_meas = self.rect.rect_to_rig(x, y, disparity)  # eq. (2)
-        X_rig = X_meas
         from_top = None
         y_centroid = y  # an upright body's centre's y from its centroid, where fused with the top's
         if upright is None:
@@ -153,7 +152,6 @@ class Localizer:
                 if top_px is not None:
                     from_top = self._below_top(top_px, disparity, behind[0], stature)
                 y = y_centroid if from_top is None else from_top[0]
-                X_rig = self.rect.rect_to_rig(x, y, disparity)
         top_fused = top_fused and from_top is not None
         s_c = 0.0 if self.centroid_sigma_px is None else max(self.centroid_sigma_px, 0.5 / np.sqrt(max(area, 1)))
         cal = self.rect.rig.sigma  # the calibration's own uncertainty (tracker.calib_sigma)
@@ -175,12 +173,12 @@ class Localizer:
             v_centroid = extra_px[1] ** 2 + ry**2 + max(s_up**2 - extra_px[1] ** 2, 0.0)
             if from_top is not None:
                 v_top = self.solid.rim_sigma_px**2 + from_top[1] ** 2
-                if top_fused:  # the bottom inferred: both, eq. (1-2) at the fused y
+                if top_fused:  # the bottom inferred: both
                     y, v_top = fused((from_top[0], v_top), (y_centroid, v_centroid))
-                    X_rig = self.rect.rect_to_rig(x, y, disparity)
                 S[1, 1] = s_c**2 + s_cy**2 + v_top
             else:
                 S[1, 1] = s_c**2 + s_cy**2 + v_centroid
+        X_rig = self.rect.rect_to_rig(x, y, disparity)  # eq. (2) at an upright body's centre
         J = self.rect.rig_to_rect_jacobian(x, y, disparity)
         cov_rig = J @ S @ J.T + cal.scale_rel**2 * np.outer(X_rig, X_rig)  # f·b off by ε: X -> (1 + ε) X
         if behind is not None:
