@@ -62,6 +62,7 @@ def test_two_measurements_are_fused_by_their_weights_and_their_disagreement_wide
     y, v = fused((10.0, 1.0), (16.0, 4.0))  # χ² = 36 / 5: the variance scaled by it
     assert math.isclose(y, (10.0 + 16.0 / 4.0) / 1.25) and math.isclose(v, 36.0 / 5.0 / 1.25)
     assert fused((3.0, 2.0), (3.0, 2.0)) == (3.0, 1.0)
+    assert fused((3.0, 0.0), (5.0, 2.0)) == (3.0, 0.0) and fused((3.0, 2.0), (5.0, 0.0)) == (5.0, 0.0)
 
 
 def test_a_person_whose_bottom_was_inferred_is_placed_between_its_top_and_its_centroid() -> None:

@@ -395,11 +395,13 @@ class Verifier(RegionMatcher):
         if d_hint is None:
             return None
         m_right = self.right_key_at(frame, box, d_hint)
-        obj, inferred = largest_component(m_left & m_right), False
-        if self.sub.left_background(frame.gimbal) is None:
-            head = with_head(m_left & m_right)
+        both = m_left & m_right
+        if self.sub.left_background(frame.gimbal) is None:  # the cameras move
+            head = with_head(both)
             feet = feet_at_ground_depth(head, m_left | m_right, cm.disparity, cm.valid, d_hint)
             obj, inferred = with_head(feet), feet is not head
+        else:
+            obj, inferred = largest_component(both), False
         if int(np.count_nonzero(obj)) < self.cfg.min_area_px:
             return None
         # the rest of the object: where the right key sees it at this disparity, or next to the solid
