@@ -68,19 +68,25 @@ def test_two_measurements_are_fused_by_their_weights_and_their_disagreement_wide
 def test_a_person_whose_bottom_was_inferred_is_placed_between_its_top_and_its_centroid() -> None:
     rect = Rectifier(default_rig())
     d = rect.f * rect.rig.baseline / 10.0
-    args = (np.array([360.0, 220.0]), d, 0.05, 4000, None, (0.0, 0.0), (60.0, 100.0), None, True, 150.0)
     loc = Localizer(rect, solid=SolidPrior())
-    from_top = loc.locate(*args)
-    from_centroid = loc.locate(*args[:9])
-    both = loc.locate(*args, top_fused=True)
-    y_top, y_c, y_f = (float(rect.rig_to_rect(p.rig[None, :])[1][0]) for p in (from_top, from_centroid, both))
-    assert abs(y_top - y_c) > 1.0
-    assert min(y_top, y_c) < y_f < max(y_top, y_c)
-    # no narrower than the fused variance, no wider than the two would be apart
-    assert both.sigma_phi < max(from_top.sigma_phi, from_centroid.sigma_phi) * math.sqrt(
-        (y_top - y_c) ** 2 / (from_top.sigma_phi**2 + from_centroid.sigma_phi**2) / rect.f**2 + 1.0)
-    # without a top, or for a ball, the flag changes nothing
-    assert np.allclose(loc.locate(*args[:9], top_fused=True).rig, from_centroid.rig)
+
+    def placed(top_px: float | None, top_fused: bool = False):  # type: ignore[no-untyped-def]
+        args = (np.array([360.0, 220.0]), d, 0.05, 4000, None, (0.0, 0.0), (60.0, 100.0), None, True, top_px)
+        p = loc.locate(*args, top_fused=top_fused)
+        return float(rect.rig_to_rect(p.rig[None, :])[1][0]), p.sigma_phi
+
+    (y_c, s_c), (y_t, s_t), (y_f, s_f) = placed(None), placed(150.0), placed(150.0, True)
+    assert abs(y_t - y_c) > 10.0  # the top's estimate 22 px above the centroid's here
+    assert min(y_t, y_c) < y_f < max(y_t, y_c)
+    plain = (s_t**-2 + s_c**-2) ** -0.5
+    chi2 = ((y_t - y_c) / rect.f) ** 2 / (s_t**2 + s_c**2)  # about 31: they disagree
+    assert math.isclose(s_f, plain * math.sqrt(chi2), rel_tol=0.05) and s_f > max(s_t, s_c)
+    # a top that agrees with the centroid: the plain fusion, narrower than either
+    (y_a, s_a), (y_g, s_g) = placed(150.0 + y_c - y_t), placed(150.0 + y_c - y_t, True)
+    assert abs(y_a - y_c) < 0.01 and math.isclose(y_g, y_c, abs_tol=0.01)
+    assert math.isclose(s_g, (s_a**-2 + s_c**-2) ** -0.5, rel_tol=0.05) and s_g < min(s_a, s_c)
+    # without a top the flag changes nothing
+    assert placed(None, True) == (y_c, s_c)
 
 
 def test_a_walker_seen_while_the_cameras_pan_keeps_its_feet() -> None:
