@@ -89,6 +89,30 @@ def test_a_person_whose_bottom_was_inferred_is_placed_between_its_top_and_its_ce
     assert placed(None, True) == (y_c, s_c)
 
 
+def test_an_outline_short_of_its_stature_widens_its_tops_estimate_by_half_the_shortfall() -> None:
+    rect = Rectifier(default_rig())
+    d = rect.f * rect.rig.baseline / 10.0  # 1.70 m at 10 m: 1.7 f / 10 px high
+    loc = Localizer(rect, solid=SolidPrior())
+    tall = 1.70 * d / rect.rig.baseline
+    assert math.isclose(loc._shortfall_px(tall - 12.0, d, None), 12.0, abs_tol=1e-9)
+    assert loc._shortfall_px(tall + 5.0, d, None) == 0.0  # never negative
+    assert math.isclose(loc._shortfall_px(tall, d, (1.80, 0.01)), 0.10 * d / rect.rig.baseline, abs_tol=1e-9)
+    # an exact prior (no σ on the top's own estimate): the top stands, unless the outline falls short of the
+    # stature its track measured, which leaves the top's estimate half that shortfall of 1-σ
+    exact = Localizer(rect, solid=SolidPrior(rim_sigma_px=0.0, height_sigma_m=0.0, centre_below_top_sigma=0.0))
+
+    def y_of(stature: tuple[float, float], top_fused: bool) -> float:
+        args = (np.array([360.0, 220.0]), d, 0.05, 4000, None, (0.0, 0.0), (60.0, tall), None, True, 150.0,
+                None, None, stature)
+        return float(rect.rig_to_rect(exact.locate(*args, top_fused=top_fused).rig[None, :])[1][0])
+
+    assert math.isclose(y_of((1.70, 0.01), True), y_of((1.70, 0.01), False), abs_tol=1e-9)
+    y_c = float(rect.rig_to_rect(exact.locate(np.array([360.0, 220.0]), d, 0.05, 4000, None, (0.0, 0.0),
+                                              (60.0, tall)).rig[None, :])[1][0])
+    y_t, y_f = y_of((2.20, 0.01), False), y_of((2.20, 0.01), True)
+    assert min(y_t, y_c) + 0.1 < y_f < max(y_t, y_c) - 0.1
+
+
 def test_a_walker_seen_while_the_cameras_pan_keeps_its_feet() -> None:
     # pan:body frame 84: eq. (9) lost rows 337-347 of the walker's feet against the ground at their depth
     # (its outline ended at row 336, the centroid 7.8 px off the truth's); filled, the outline reaches 343
