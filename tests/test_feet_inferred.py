@@ -92,11 +92,11 @@ def test_a_person_whose_bottom_was_inferred_is_placed_between_its_top_and_its_ce
 def test_an_outline_short_of_its_stature_widens_its_tops_estimate_by_half_the_shortfall() -> None:
     rect = Rectifier(default_rig())
     d = rect.f * rect.rig.baseline / 10.0  # 1.70 m at 10 m: 1.7 f / 10 px high
-    loc = Localizer(rect, solid=SolidPrior())
+    prior, b = SolidPrior(), rect.b
     tall = 1.70 * d / rect.rig.baseline
-    assert math.isclose(loc._shortfall_px(tall - 12.0, d, None), 12.0, abs_tol=1e-9)
-    assert loc._shortfall_px(tall + 5.0, d, None) == 0.0  # never negative
-    assert math.isclose(loc._shortfall_px(tall, d, (1.80, 0.01)), 0.10 * d / rect.rig.baseline, abs_tol=1e-9)
+    assert math.isclose(prior.short_of_stature_px(tall - 12.0, d, b), 12.0, abs_tol=1e-9)
+    assert prior.short_of_stature_px(tall + 5.0, d, b) == 0.0  # never negative
+    assert math.isclose(prior.short_of_stature_px(tall, d, b, 1.80), 0.10 * d / rect.rig.baseline, abs_tol=1e-9)
     # an exact prior (no σ on the top's own estimate): the top stands, unless the outline falls short of the
     # stature its track measured, which leaves the top's estimate half that shortfall of 1-σ
     exact = Localizer(rect, solid=SolidPrior(rim_sigma_px=0.0, height_sigma_m=0.0, centre_below_top_sigma=0.0))

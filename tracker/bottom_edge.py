@@ -219,7 +219,7 @@ def feet_at_ground_depth(obj: BoolA, keys: BoolA, bg_disparity: F32, bg_valid: B
     low_from = rows[0] + (1.0 - FEET_SHARE) * (rows[-1] - rows[0] + 1)
     blind = bg_valid & (np.abs(bg_disparity - disparity) < FEET_LEVEL_PX)  # |D_B - d| small: eq. (9) blind
     yy = np.arange(obj.shape[0])[:, None]
-    lowest = np.where(obj.any(axis=0), obj.shape[0] - 1 - np.argmax(obj[::-1], axis=0), obj.shape[0])
+    lowest = lowest_rows(obj, 0, obj.shape[0], 0, obj.shape[1])  # a column without any: nothing below it
     zone = blind & (yy >= low_from)
     edges = keys & zone & (yy > lowest[None, :])
     if not edges.any():

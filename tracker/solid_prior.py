@@ -239,11 +239,15 @@ class SolidPrior:
             return behind
         return behind[0], max(behind[1], self.part_depth_sigma_m * disparity / baseline_m)
 
-    def short_of_stature_px(self, height_px: float, disparity: float, baseline_m: float) -> float:
-        """How much shorter (px) an upright outline height_px high is than a person of height_m at its
-        disparity (px; rectified, baseline_m the rig's baseline): height_m d / b - h, at least 0. Seen only in
-        part at a side (a walker entering the image), the rest of the person may lie above or below it."""
-        return max(self.height_m * disparity / baseline_m - height_px, 0.0) if baseline_m > 0 else 0.0
+    def short_of_stature_px(self, height_px: float, disparity: float, baseline_m: float,
+                            stature_m: float | None = None) -> float:
+        """How much shorter (px) an upright outline height_px high is than a person of height_m (or of
+        stature_m, the stature its track measured) at its disparity (px; rectified, baseline_m the rig's
+        baseline): H d / b - h, at least 0. Seen only in part at a side (a walker entering the image), the
+        rest of the person may lie above or below it; its bottom inferred (tracker.localize), its top or its
+        bottom may be the part lost."""
+        height = self.height_m if stature_m is None else stature_m
+        return max(height * disparity / baseline_m - height_px, 0.0) if baseline_m > 0 else 0.0
 
     def unseen_rest_px(self, width_px: float, height_px: float, disparity: float, baseline_m: float,
                        cut: tuple[bool, bool]) -> tuple[float | None, float | None]:

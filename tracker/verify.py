@@ -399,7 +399,8 @@ class Verifier(RegionMatcher):
         if self.sub.left_background(frame.gimbal) is None:  # the cameras move
             head = with_head(both)
             feet = feet_at_ground_depth(head, m_left | m_right, cm.disparity, cm.valid, d_hint)
-            obj, inferred = with_head(feet), feet is not head
+            inferred = feet is not head
+            obj = with_head(feet) if inferred else head
         else:
             obj, inferred = largest_component(both), False
         if int(np.count_nonzero(obj)) < self.cfg.min_area_px:
