@@ -223,7 +223,8 @@ class Pipeline:
         fuse = b.bottom_inferred and not terms.hidden_below  # its feet inferred: from its top and its centroid
         top = self._top_px(b) if (terms.hidden_below or fuse) and in_frame else None  # seen over what hides it
         swing, gait = self.headings.shares(track_id, frame.index, self.localizer.origin)
-        centre = b.centroid_rect + self.rect.shift_to_rect(b.centroid_raw, terms.rim_shift_px)  # faint bands undone
+        centre = (b.centroid_rect + self.rect.shift_to_rect(b.centroid_raw, terms.rim_shift_px)  # faint bands undone
+                  + self._perspective_px(b, (float(w), float(h)), terms))
         loc = self.localizer.locate(centre, b.disparity, max(b.disparity_sigma, terms.disparity_px),
                                     b.area, frame.gimbal, (cx, float(np.hypot(cy, jump))), (float(w), float(h)),
                                     terms.rim_px, in_frame, top, swing, True if terms.known_person else None,
@@ -231,6 +232,21 @@ class Pipeline:
                                     gait, self.subtractor.left_background(frame.gimbal) is None, fuse)
         self.headings.add(track_id, frame.index, frame.t, loc.world)
         return loc
+
+    def _perspective_px(self, b: Blob, extent_px: tuple[float, float], terms: SigmaTerms) -> F64:
+        """How far (px, x and y) a solid body's centre's direction lies from eq. (10)'s centroid by perspective:
+        to its direction centroid (Rectifier.direction_centroid) along x for a body seen whole across, along
+        y too for a round one seen whole (neither upright nor wide; an upright body's rows each lie at about
+        one depth, so its y is a plane figure's), and not at all for a wide one (a vehicle's long flat sides
+        are not mirrored about the ray) or without a SolidPrior (a board). A side cut by the image's edge or
+        a nearer object is not mirrored either. walk:body's walkers at 3 m lay up to 0.1° outwards before."""
+        solid = self.localizer.solid
+        if solid is None or solid.wide(*extent_px) or not terms.seen_whole[0]:
+            return np.zeros(2)
+        shift = self.rect.direction_centroid(b.box, b.mask) - b.centroid_rect
+        if terms.known_person or solid.upright(*extent_px) or not terms.seen_whole[1]:
+            shift[1] = 0.0
+        return shift
 
     def _top_px(self, b: Blob) -> float:
         """The rectified y (px) of a blob's outline's top: the upper edge of its highest row's pixels."""

@@ -41,7 +41,10 @@ class Rectifier:
     pinhole (pixels); b: baseline (m). maps[k] = (map_x, map_y) float32 (H, W): raw position sampled for
     each rectified pixel. rect_of_raw[k]: (H, W, 2) rectified position of each raw pixel. area_of_raw:
     (H, W) rectified area of each raw left pixel; area_moments: (H, W, 3) float64 [a x_rect, a y_rect, a]
-    of each raw left pixel, whose masked sums give an area-weighted rectified centroid (eq. 10).
+    of each raw left pixel, whose masked sums give an area-weighted rectified centroid (eq. 10);
+    ray_moments: (H, W, 3) float64 a (u, v, 1) / (1 + u² + v²)² of each raw left pixel (u, v = (x_rect - cx) / f,
+    (y_rect - cy) / f): its unit ray (u, v, 1) / √(1 + u² + v²) weighted by the solid angle it spans, a / f² /
+    (1 + u² + v²)^(3/2), for the direction centroid (`direction_centroid`).
     """
 
     rig: StereoRig
@@ -55,6 +58,7 @@ class Rectifier:
     rect_of_raw: tuple[F32, F32] = field(init=False)
     area_of_raw: F32 = field(init=False)
     area_moments: NDArray[np.float64] = field(init=False)
+    ray_moments: NDArray[np.float64] = field(init=False)
 
     def __post_init__(self) -> None:
         L, R = self.rig.left, self.rig.right
@@ -79,6 +83,9 @@ class Rectifier:
         self.area_of_raw = _pixel_areas(rect[0])
         a = self.area_of_raw.astype(np.float64)
         self.area_moments = np.dstack([a * rect[0][..., 0], a * rect[0][..., 1], a])
+        u, v = (rect[0][..., 0] - self.cx) / self.f, (rect[0][..., 1] - self.cy) / self.f
+        w = a / (1.0 + u * u + v * v) ** 2
+        self.ray_moments = np.dstack([w * u, w * v, w])
 
     def rectify(self, img: U8, side: int, box: tuple[int, int, int, int] | None = None) -> U8:
         """Rectified image of camera `side` (0 left, 1 right), or only the rectified window
@@ -143,6 +150,20 @@ class Rectifier:
         x = self.f * Xr[:, 0] / Xr[:, 2] + self.cx
         y = self.f * Xr[:, 1] / Xr[:, 2] + self.cy
         return x, y, self.f * self.b / Xr[:, 2]
+
+    def direction_centroid(self, box: tuple[int, int, int, int], mask: NDArray[np.bool_]) -> F64:
+        """The rectified (x, y) (px, (2,)) of a raw left mask's direction centroid: where the mean of its
+        pixels' unit rays, each weighted by the solid angle it spans (ray_moments), meets the image, x = cx +
+        f Σ w u / Σ w, y = cy + f Σ w v / Σ w. Eq. (10)'s area-weighted centroid takes a round body off the
+        axis outwards by perspective (a cylinder's rim rays from the lens, at ψ ± β, meet the image at f tan(ψ
+        ± β), whose mean is f tan ψ (1 + β² / cos² ψ) to second order: 0.8 px for a person's 0.2 m at 3 m, 17°
+        off the axis); this mean lies on the direction of a body symmetric about a plane through the lens and
+        its centre, in that plane: a ball's centre (its silhouette a circular cone), an upright body's
+        vertical axis along x (a vertical cylinder's silhouette mirrored about the vertical plane through
+        its axis). box: (x0, y0, x1, y1) of mask (bool, (y1 - y0, x1 - x0))."""
+        x0, y0, x1, y1 = box
+        s = cv2.mean(self.ray_moments[y0:y1, x0:x1], mask=mask.view(np.uint8))
+        return np.array([self.cx + self.f * s[0] / s[2], self.cy + self.f * s[1] / s[2]])
 
     def shift_to_rect(self, at_raw: F64, shift: tuple[float, float]) -> F64:
         """A small shift (px, x and y) of the raw left pixels at at_raw (x, y) in rectified pixels, (2,): the

@@ -143,7 +143,10 @@ class SolidPrior:
       band's edge. b = 0.48 % since the centroid is moved to undo the band a faint side loses
       (tracker.rim_contrast.rim_shift_px): the same fit over 2,095 frames of those six scenes then gave b
       0.37 % against 0.45 % on the same code without it (a 0.21 % either way, log-likelihood 115 higher),
-      and b was scaled by that ratio, 0.82. While the cameras move there is no temporal model
+      and b was scaled by that ratio, 0.82. a = 0.22 % and b = 0.44 % since the centroid is moved to the
+      direction centroid along x (tracker.pipeline, perspective): the same fit over 3,221 upright frames of
+      those six scenes gave a 0.146 % and b 0.294 % against 0.185 % and 0.324 % on the same code without it,
+      and a and b were scaled by those ratios, 0.79 and 0.91. While the cameras move there is no temporal model
       to measure the rim's contrast by (`locate`'s rim_px None), the outline is drawn by warping, and the
       rim's fixed term counts along x as well: on pan:body the silhouette's centroid was found 0.33 px
       off the truth's (median |error|) against 0.26 px on walk:body and 0.12 px on endless:body, and the
@@ -188,8 +191,8 @@ class SolidPrior:
     thinnest: float = 0.12
     upright_side_ratio: float = 0.44
     upright_side_sigma: float = 0.20
-    upright_x_sigma: float = 0.0028
-    upright_swing_sigma: float = 0.0048
+    upright_x_sigma: float = 0.0022
+    upright_swing_sigma: float = 0.0044
     upright_still_sigma: float = 0.0013
     upright_still_y_sigma: float = 0.0127
     wide_aspect: float = 2.0
