@@ -125,7 +125,7 @@ class Verifier(RegionMatcher):
                 hint = around[0]  # one track predicted past the region's edge (a car split by a post)
             new_later = hint is None and may_search is not None and not may_search()
             got = None if new_later or self._too_small_to_be_new(n_left, hint) else self._verify_region(
-                frame, box, cm, m_left, hint, free, around, found)
+                frame, box, cm, m_left, hint, free, around, found, m_raw & ~m_left)
             if got is None and hint is not None and at_left_border(m_left, box, hint):
                 got, m_left = self._every_region_at_border(frame, box, cm, (m_raw, m_left), hint, free, around,
                                                            found)
@@ -228,12 +228,14 @@ class Verifier(RegionMatcher):
 
     def _verify_region(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap, m_left: BoolA,
                        d_hint: float | None, free: BoolA, around: list[float] | None = None,
-                       found: list[Blob] | None = None) -> tuple[Blob, BoolA | None] | None:
+                       found: list[Blob] | None = None, rest: BoolA | None = None
+                       ) -> tuple[Blob, BoolA | None] | None:
         """Verify one connected region of the left-key mask inside a box. Returns the blob and, with the
         cameras still, the box's pixels unlike the temporal background (|Γ - g B| > ε + 3 g D).
         around: the predicted disparities of the tracks about the region (regions.hints_around); with more
         than one, a tracked object's outline keeps only its pixels that match best at its own (tracker.split).
-        found: the objects found before in the box (they stay out of the outline's gain)."""
+        found: the objects found before in the box (they stay out of the outline's gain). rest: the box's
+        other left-key pixels, where a head past the neck's gap may lie (_outline_stereo)."""
         cfg = self.cfg
         around = around or []
         x0, y0, x1, y1 = box
@@ -245,7 +247,7 @@ class Verifier(RegionMatcher):
             matched, d0 = self.seen_by_right(frame, box, seen_changed(matched, changed, m_left), d_hint, found), d_hint
         else:
             # a new object, or the cameras move: verification by warping in both directions
-            stereo = self._outline_stereo(frame, box, cm, m_left, d_hint)
+            stereo = self._outline_stereo(frame, box, cm, m_left, d_hint, rest)
             if stereo is None:
                 return None
             obj, either, d0, inferred = stereo
@@ -384,7 +386,7 @@ class Verifier(RegionMatcher):
                                 np.zeros_like(region) if core is None else core, region, self.cfg.epsilon, taken)
 
     def _outline_stereo(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap, m_left: BoolA,
-                        d_hint: float | None) -> tuple[BoolA, BoolA, float, bool] | None:
+                        d_hint: float | None, rest: BoolA | None = None) -> tuple[BoolA, BoolA, float, bool] | None:
         """The left-key mask intersected with the right-key mask warped at the object's disparity: the
         occlusion shadows of both keys drop out (verification by warping in both directions). While the
         cameras move (no temporal model to draw the outline after), a head past the neck's gap is kept
@@ -397,7 +399,7 @@ class Verifier(RegionMatcher):
         m_right = self.right_key_at(frame, box, d_hint)
         both = m_left & m_right
         if self.sub.left_background(frame.gimbal) is None:  # the cameras move
-            head = with_head(both)
+            head = with_head(both if rest is None else both | (rest & m_right))
             feet = feet_at_ground_depth(head, m_left | m_right, cm.disparity, cm.valid, d_hint)
             inferred = feet is not head
             obj = with_head(feet) if inferred else head
