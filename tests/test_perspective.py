@@ -101,7 +101,7 @@ def test_the_pipeline_moves_a_body_by_perspective_only_where_it_is_mirrored(rect
 
 def _walker_errors(frames: int) -> np.ndarray:
     """walk:body's walker at 3-5 m, 10-18 degrees right of the axis (frames 10 on): the azimuth (deg) of the
-    located point seen from the left lens less that of the surface the left camera sees of it."""
+    located point seen from the left lens less that of its volume centre."""
     scenario = get_scenario("walk:body")
     sim = SimRig(scenario)
     pipe = Pipeline(sim.rig, solid=target_prior(scenario))
@@ -112,18 +112,19 @@ def _walker_errors(frames: int) -> np.ndarray:
         res = pipe.step(sf.frame)
         tt = sf.truth.target(1)
         dets = [d for d in res.detections if tt is not None and _on(d, tt, sf.truth.ids_left)]
-        if i < 10 or not dets or tt is None or tt.surface_world is None or dets[0].loc.measured_world is None:
+        if i < 10 or not dets or tt is None or dets[0].loc.measured_world is None:
             continue
         c = gimbal_rotation(sf.truth.gimbal.pan_deg, sf.truth.gimbal.tilt_deg) @ pipe.rect.rig.left.c
-        m, s = dets[0].loc.measured_world - c, tt.surface_world - c
+        m, s = dets[0].loc.measured_world - c, tt.world - c
         errors.append(np.degrees(np.arctan2(m[0], m[2]) - np.arctan2(s[0], s[2])))
     return np.array(errors)
 
 
-def test_a_near_walker_off_the_axis_is_located_on_its_seen_surface(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_a_near_walker_off_the_axis_is_located_nearer_its_centre(monkeypatch: pytest.MonkeyPatch) -> None:
     corrected = _walker_errors(40)
     monkeypatch.setattr(Pipeline, "_perspective_px", lambda self, b, extent, terms: np.zeros(2))
     area_weighted = _walker_errors(40)
     assert corrected.size == area_weighted.size >= 25
-    assert area_weighted.mean() > 0.04  # outwards (right) by 0.06 deg
-    assert abs(corrected.mean()) < 0.015
+    assert area_weighted.mean() > 0.08  # outwards (right) by 0.100 deg, rms 0.127
+    assert corrected.mean() < 0.05  # 0.036 deg, rms 0.076 (a turned torso's own offset is not modelled)
+    assert np.sqrt(np.mean(corrected**2)) < 0.8 * np.sqrt(np.mean(area_weighted**2))

@@ -258,13 +258,14 @@ def _wide_errors(az: float, el: float, ray: tuple[F64, F64], tt: TargetTruth, or
     its volume centroid (given), then those of the measured ray (ray: the left lens centre c and a
     direction along the centroid's own ray, without a person's shift up to its volume centre; world frame,
     Localization.measured_world - c), taken at each truth point's distance from c, against the mean of the
-    surface the left camera sees, (1/N) Σ (c + ρ_p s_p), and against
+    surface the left camera sees, Σ a_p (c + ρ_p s_p) / Σ a_p, and against
     the silhouette's point c + s̄ m̄ / |m̄| (ρ_p: unit ray of pixel p of the body's left silhouette, s_p: the
-    distance to the surface along it; m̄: the silhouette's centroid (x̄_n, ȳ_n, 1) in the undistorted
-    normalised plane, each pixel weighted by its area there; s̄: the same mean of s_p; tracker.sim.render.
-    SimRenderer.surface_mean). The tracker measures the last: eq. (10) takes the area-weighted centroid of
-    the outline's pixels in rectified coordinates, whose ray is m̄'s for the true silhouette; the surface
-    mean lies off that ray where the depth along the silhouette varies, the volume centroid where the body's
+    distance to the surface along it; a_p: its area in the undistorted normalised plane; m̄: the
+    silhouette's centroid (x̄_n, ȳ_n, 1) in that plane, each pixel weighted by a_p; s̄: the same mean of s_p;
+    tracker.sim.render.SimRenderer.surface_mean). The tracker measures the last: eq. (10) takes the
+    area-weighted centroid of the outline's pixels in rectified coordinates, whose ray is m̄'s for the true
+    silhouette; the surface mean lies off that ray where the depth along the silhouette varies (it is the
+    centroid weighted by depth, Σ a_p Z_p (x_n, y_n, 1)), the volume centroid where the body's
     hidden back is not its front's mirror. At the truth point's distance: the measured point lies at the
     body's centre's depth, behind the surface, and two points on one ray from the left lens, 0.15 m beside
     the mount's axis, differ in azimuth about the origin by about 0.15 m x δ / Z² (0.015° of walk:body's
