@@ -48,7 +48,7 @@ def _head_seen(frame: int, rest: bool, monkeypatch: pytest.MonkeyPatch) -> tuple
 
 def test_a_head_apart_from_the_body_joins_its_outline_while_the_cameras_pan(monkeypatch: pytest.MonkeyPatch) -> None:
     share, error = _head_seen(2, True, monkeypatch)
-    assert share > 0.75 and error < 3.0  # measured: 0.85 and 2.0 px
+    assert share > 0.75 and error < 3.5  # measured: 0.91 and 2.7 px (0.85 and 2.0 px before tracker.limbs)
 
 
 def test_without_the_rest_of_the_key_the_head_is_lost(monkeypatch: pytest.MonkeyPatch) -> None:

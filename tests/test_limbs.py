@@ -54,6 +54,21 @@ def test_the_space_between_the_legs_and_what_may_not_join_stay_out() -> None:
     assert np.array_equal(limbs_closed(seen, pictures, blocked, share=0.9), seen)
 
 
+def test_with_the_cameras_still_a_patch_the_temporal_picture_fits_better_stays_out() -> None:
+    legs, seen = _legs()
+    pictures = _pictures(legs, np.random.default_rng(4))
+    # the patch: the right image tells nothing (its background's picture is the object's), but the
+    # temporal picture fits it better (what the temporal model saw there before the walker came)
+    other = np.random.default_rng(5).integers(40, 200, (80, 40)).astype(np.uint8)
+    patch = np.zeros_like(legs)
+    patch[30:40, 8:16] = True
+    obj = np.where(patch, other, pictures.right_obj[0]).astype(np.uint8)
+    still = Pictures(pictures.left, [obj], obj.copy(), pictures.left.copy(), 5)
+    assert np.array_equal(limbs_closed(seen, still, np.ones_like(seen), share=0.3), seen)
+    moving = Pictures(pictures.left, [obj], obj.copy(), None, 5)
+    assert limbs_closed(seen, moving, np.ones_like(seen), share=0.3)[30:40, 8:16].all()
+
+
 def test_a_gap_longer_than_the_line_stays_open_and_with_the_cameras_moving_stereo_alone_decides() -> None:
     legs, seen = _legs()
     pictures = _pictures(legs, np.random.default_rng(3), still=False)

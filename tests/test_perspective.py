@@ -126,5 +126,5 @@ def test_a_near_walker_off_the_axis_is_located_nearer_its_centre(monkeypatch: py
     area_weighted = _walker_errors(40)
     assert corrected.size == area_weighted.size >= 25
     assert area_weighted.mean() > 0.08  # outwards (right) by 0.100 deg, rms 0.127
-    assert corrected.mean() < 0.05  # 0.036 deg, rms 0.076 (a turned torso's own offset is not modelled)
+    assert abs(corrected.mean()) < 0.05  # 0.036 deg, rms 0.076 (a turned torso's own offset is not modelled)
     assert np.sqrt(np.mean(corrected**2)) < 0.8 * np.sqrt(np.mean(area_weighted**2))

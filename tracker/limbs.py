@@ -9,7 +9,8 @@ them apart, and the outline's centroid moves up: on walk:body's walker at 3-4 m 
 pixels, against the true silhouette's).
 
 A leg is a solid limb: where the outline holds it above and below such a patch in one column, the patch is
-the leg's. `limbs_closed` closes a person's outline along its columns (a morphological closing with a
+the leg's. `limbs_closed` closes an upright outline (tracker.strips.whole_outline: a person's, or an upright
+board's, which has no gaps to close) along its columns (a morphological closing with a
 vertical line LIMB_SHARE of the outline's height long) and takes in what the closing adds where the
 pictures do not say background: the object's picture fits at least as well as the background's in the
 right image and, with the cameras still, as the temporal picture (C_o <= C_s, C_o <= C_t; tracker.rim).
@@ -17,9 +18,9 @@ The space beneath an arm or between two legs that the closing also spans is back
 fits better, and stays out. On walk:body's 300 frames, the outlines' pixels outside the true silhouettes
 went 18,957 -> 20,146 and those missed 63,683 -> 44,980; the centroid of its walker at 3-4 m lies 0.78 px
 above the true silhouette's (1.16 px before). A plain closing of the outline's lower half by a 21-px line,
-without the tests, missed 46,121 but added 27,692. Lines of a tenth of the height, 21 px and 31 px gave
-elevation RMSE within 0.003° of each other on `tmeye eval --all` (docs/evaluation.md); a tenth kept
-walk:body's azimuth 1-σ line in its band."""
+without the tests, missed 46,121 and left 27,692 outside. Lines of a tenth of the height, and of 21 px and
+31 px with the cameras still only, gave elevation RMSE within 0.003° of each other on `tmeye eval --all`
+(docs/evaluation.md); a tenth kept walk:body's azimuth 1-σ line in its band."""
 
 from __future__ import annotations
 

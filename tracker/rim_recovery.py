@@ -36,12 +36,12 @@ class RimRecovery:
                 gain: float = 1.0, model: tuple[F32, F32] | None = None) -> BoolA:
         """The object's mask (bool, over the box) with its rim recovered, worked out over its bounding box
         grown by the band and the window: recover_rim with the cameras still (`model` given), then
-        recover_rim_keys, then for a person (tracker.strips.whole_outline) tracker.limbs.limbs_closed. d:
-        its disparity (px); cm: the background's correspondences over the box; model: the left temporal
-        background B and its deviation D (full image) at global gain g = `gain`, None while the cameras
-        move; free: where it may grow (no other object's pixels, none the temporal outline left out as
-        changed). With the cameras still, pixels whose background moves (3 g D ≥ ε: foliage) do not join:
-        no hypothesis holds. The pictures are sampled once for all three."""
+        recover_rim_keys, then for an upright outline (tracker.strips.whole_outline)
+        tracker.limbs.limbs_closed. d: its disparity (px); cm: the background's correspondences over the
+        box; model: the left temporal background B and its deviation D (full image) at global gain g =
+        `gain`, None while the cameras move; free: where it may grow (no other object's pixels, none the
+        temporal outline left out as changed). With the cameras still, pixels whose background moves (3 g D
+        ≥ ε: foliage) do not join: no hypothesis holds. The pictures are sampled once for all three."""
         (sx0, sy0, sx1, sy1), (x0, y0, x1, y1), right_obj, right_bg = self._pictures(frame, box, cm, obj, d)
         left = frame.left[y0:y1, x0:x1]
         allowed = cm.valid[sy0:sy1, sx0:sx1] & free[sy0:sy1, sx0:sx1]
@@ -54,7 +54,7 @@ class RimRecovery:
         if model is not None:
             part = recover_rim(part, pictures, allowed, self.cfg)
         shift = np.float32(d) - cm.disparity[sy0:sy1, sx0:sx1]
-        may_join = allowed.copy()  # where a person's limbs may be closed (tracker.limbs)
+        may_join = allowed.copy()  # where an upright outline's limbs may be closed (tracker.limbs)
         # where the background lies about as deep as the object (the ground at a walker's feet), the
         # object's pictures match it as well: no test tells them apart there
         allowed &= shift > np.float32(self.cfg.slant * d + 1.0)
@@ -67,7 +67,7 @@ class RimRecovery:
         fx, fy = self.rect.left_along(sub, shift)
         part = recover_rim_keys(part, pictures, left_bg, in_part(fx, fy, sub), in_part(bx, by, sub), allowed,
                                 self.cfg, self.epsilon, shift >= np.float32(self.cfg.window_px))
-        if whole_outline(part):  # a person
+        if whole_outline(part):  # upright: a person's
             part = limbs_closed(part, pictures, may_join)
         out = obj.copy()
         out[sy0:sy1, sx0:sx1] = part

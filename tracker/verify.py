@@ -390,7 +390,9 @@ class Verifier(RegionMatcher):
         """The left-key mask intersected with the right-key mask warped at the object's disparity: the
         occlusion shadows of both keys drop out (verification by warping in both directions). While the
         cameras move (no temporal model to draw the outline after), a head past the neck's gap is kept
-        (with_head) and the feet eq. (9) cannot see against the ground are filled (feet_at_ground_depth).
+        (with_head, over the box's other left-key pixels `rest` as well where the right key sees them at
+        this disparity, where that keeps the same body) and the feet eq. (9) cannot see against the ground
+        are filled (feet_at_ground_depth).
         Returns that mask, the union of the two masks, the disparity used (the track's prediction, or for a
         new object a search over the whole range) and whether the feet were filled (Blob.bottom_inferred)."""
         d_hint = self._coarse_disparity(frame, box, m_left, d_hint)
@@ -399,7 +401,10 @@ class Verifier(RegionMatcher):
         m_right = self.right_key_at(frame, box, d_hint)
         both = m_left & m_right
         if self.sub.left_background(frame.gimbal) is None:  # the cameras move
-            head = with_head(both if rest is None else both | (rest & m_right))
+            head = with_head(both)
+            if rest is not None:  # the head, or more of the body, among the box's other pixels both keys see
+                more = with_head(both | (rest & m_right))
+                head = more if more[largest_component(both)].all() else head  # the same body, not another
             feet = feet_at_ground_depth(head, m_left | m_right, cm.disparity, cm.valid, d_hint)
             inferred = feet is not head
             obj = with_head(feet) if inferred else head
