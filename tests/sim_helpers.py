@@ -3,20 +3,24 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
-from tracker.evaluation import _on, target_prior
+import tracker.rim_recovery as rim_recovery
+from tracker.evaluation import _on, survey_poses, target_prior
 from tracker.pipeline import Pipeline
 from tracker.results import Blob, FrameResult
 from tracker.sim.scenarios import SimFrame, SimRig, get_scenario
 
 
-def run_frames(name: str, frames: int) -> tuple[Pipeline, SimFrame, FrameResult]:
+def run_frames(name: str, frames: int, surveyed: bool = False) -> tuple[Pipeline, SimFrame, FrameResult]:
     """A scenario's first `frames` frames through a pipeline with the scenario's solid prior, its
-    background learnt from the empty scene: the pipeline, the last frame and its result."""
+    background learnt from the empty scene (with `surveyed`, at every pose `tmeye eval` surveys): the
+    pipeline, the last frame and its result."""
     scenario = get_scenario(name)
     sim = SimRig(scenario)
     pipe = Pipeline(sim.rig, solid=target_prior(scenario))
-    pipe.learn_background(sim.background())
+    for g in survey_poses(scenario) if surveyed else [None]:
+        pipe.learn_background(sim.background(g))
     for _ in range(frames):
         sf = sim.step()
         res = pipe.step(sf.frame)
@@ -39,3 +43,16 @@ def box_blob(box: tuple[int, int, int, int], d: float, d_bg: float, part_only: b
     mask = np.ones((y1 - y0, x1 - x0), bool)
     c = np.array([(x0 + x1 - 1) / 2, (y0 + y1 - 1) / 2])
     return Blob(box, mask, mask.size, c, c.copy(), d, 0.05, d_bg, 0.95, part_only=part_only)
+
+
+def outline_in_image(blob: Blob, shape: tuple[int, ...]) -> np.ndarray:
+    """A blob's outline as a mask over the whole left image (bool, `shape`)."""
+    out = np.zeros(shape, bool)
+    x0, y0, x1, y1 = blob.box
+    out[y0:y1, x0:x1] = blob.mask
+    return out
+
+
+def without_limbs(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The pipeline without the limbs' closing (tracker.limbs), for figures measured before it."""
+    monkeypatch.setattr(rim_recovery, "limbs_closed", lambda obj, pictures, allowed: obj)

@@ -6,9 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from sim_helpers import walker_errors
+from sim_helpers import walker_errors, without_limbs
 
-import tracker.rim_recovery as rim_recovery
 import tracker.verify as verify
 from tracker.masks import changed_holes_filled
 
@@ -70,7 +69,7 @@ def test_a_walkers_legs_patches_like_the_ground_join_its_outline(monkeypatch: py
     # walk:body frame 9: patches of the near walker's lower legs match the ground they cover in both eq. (9)
     # and the temporal model; the centroid was 5.0 px from the truth's with them left out, 3.4 px filled
     # (without the limbs' closing, tracker.limbs, which closes some of them in too)
-    monkeypatch.setattr(rim_recovery, "limbs_closed", lambda obj, pictures, allowed: obj)
+    without_limbs(monkeypatch)
     got = walker_errors("walk:body", 9)
     assert len(got) == 1 and got[0] < 4.0
     original = verify.changed_holes_filled

@@ -9,10 +9,9 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from sim_helpers import run_frames, walker_errors
+from sim_helpers import outline_in_image, run_frames, walker_errors, without_limbs
 
 import tracker.growth as growth
-import tracker.rim_recovery as rim_recovery
 import tracker.verify as verify
 from tracker.bgdepth import CorrespondenceMap
 from tracker.growth import at_own_depth, grown_by_change, local_corr, without_uncovered
@@ -198,15 +197,13 @@ def test_a_part_past_the_reach_joins_only_where_the_other_camera_tells_it_and_wi
 def _outline(name: str, frames: int, grow: bool, monkeypatch: pytest.MonkeyPatch) -> tuple[int, int, int]:
     """A scenario's target's outline in the last of its first frames: (true pixels it holds, true pixels it
     misses, pixels off the target); without the limbs' closing (tracker.limbs), as when measured."""
-    monkeypatch.setattr(rim_recovery, "limbs_closed", lambda obj, pictures, allowed: obj)
+    without_limbs(monkeypatch)
     if not grow:
         monkeypatch.setattr(verify, "grow_tracked", lambda *a: a[5])
     _, sf, res = run_frames(name, frames)
     truth = sf.truth.ids_left == 1
     (det,) = [d for d in res.detections if d.track_id == res.primary_id]
-    x0, y0, x1, y1 = det.blob.box
-    mask = np.zeros(truth.shape, bool)
-    mask[y0:y1, x0:x1] = det.blob.mask
+    mask = outline_in_image(det.blob, truth.shape)
     monkeypatch.undo()
     n = np.count_nonzero
     return int(n(mask & truth)), int(n(truth & ~mask)), int(n(mask & ~truth))
@@ -224,7 +221,7 @@ def test_on_the_simulator_a_far_legs_patches_below_the_outline_join(monkeypatch:
     # walk:body frame 10, a walker at 3 m: patches of its shaded far leg 10-20 px below the outline, beyond
     # the 8 px reach; the centroid 8.2 px off the truth's without the far reach, 5.1 px with it when measured
     # (without the limbs' closing, tracker.limbs, which closes some of them in too)
-    monkeypatch.setattr(rim_recovery, "limbs_closed", lambda obj, pictures, allowed: obj)
+    without_limbs(monkeypatch)
     got = walker_errors("walk:body", 10)
     assert len(got) == 1 and got[0] < 6.5
     monkeypatch.setattr(growth, "_FAR_REACH", growth._REACH)

@@ -8,29 +8,20 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from sim_helpers import outline_in_image, run_frames
 
-from tracker.evaluation import _on, survey_poses, target_prior
-from tracker.pipeline import Pipeline
-from tracker.sim.scenarios import SimRig, get_scenario
+import tracker.verify as verify
+from tracker.evaluation import _on
 
 
 def _head_seen(frame: int, rest: bool, monkeypatch: pytest.MonkeyPatch) -> tuple[float, float]:
     """pan:body run as `tmeye eval` runs it (the background surveyed) to `frame`: the share of the walker's
     head (the top 12 % of its silhouette's rows) in its outline, and the centroid's error (raw px)."""
     if not rest:
-        import tracker.verify as verify
-
         plain = verify.Verifier._outline_stereo
         monkeypatch.setattr(verify.Verifier, "_outline_stereo",
                             lambda self, fr, box, cm, m_left, d, rest=None: plain(self, fr, box, cm, m_left, d))
-    scenario = get_scenario("pan:body")
-    sim = SimRig(scenario)
-    pipe = Pipeline(sim.rig, solid=target_prior(scenario))
-    for g in survey_poses(scenario):
-        pipe.learn_background(sim.background(g))
-    for _ in range(frame + 1):
-        sf = sim.step()
-        res = pipe.step(sf.frame)
+    _, sf, res = run_frames("pan:body", frame + 1, surveyed=True)
     tt = sf.truth.target(1)
     assert tt is not None and tt.centroid_left is not None
     on = [d for d in res.detections if _on(d, tt, sf.truth.ids_left)]
@@ -39,9 +30,7 @@ def _head_seen(frame: int, rest: bool, monkeypatch: pytest.MonkeyPatch) -> tuple
     rows = np.flatnonzero(body.any(axis=1))
     head = body.copy()
     head[rows[0] + int(0.12 * (rows[-1] - rows[0] + 1)):] = False
-    outline = np.zeros_like(body)
-    x0, y0, x1, y1 = blob.box
-    outline[y0:y1, x0:x1] = blob.mask
+    outline = outline_in_image(blob, body.shape)
     return (float(np.count_nonzero(head & outline) / np.count_nonzero(head)),
             float(np.hypot(*(blob.centroid_raw - tt.centroid_left))))
 

@@ -4,9 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from sim_helpers import run_frames
+from sim_helpers import outline_in_image, run_frames, without_limbs
 
-import tracker.rim_recovery as rim_recovery
 from tracker.evaluation import _on
 from tracker.limbs import limbs_closed
 from tracker.rim import Pictures
@@ -80,16 +79,14 @@ def _walker(monkeypatch: pytest.MonkeyPatch, closed: bool) -> tuple[int, float]:
     """walk:body frame 11 (its walker at 3 m, cut by the image's bottom): the true silhouette's pixels the
     outline misses, and the centroid's vertical error (raw px)."""
     if not closed:
-        monkeypatch.setattr(rim_recovery, "limbs_closed", lambda obj, pictures, allowed: obj)
+        without_limbs(monkeypatch)
     _, sf, res = run_frames("walk:body", 12)
     tt = sf.truth.target(1)
     assert tt is not None and tt.centroid_left is not None
     on = [d for d in res.detections if _on(d, tt, sf.truth.ids_left)]
     assert len(on) == 1
     blob, body = on[0].blob, sf.truth.ids_left == 1
-    outline = np.zeros_like(body)
-    x0, y0, x1, y1 = blob.box
-    outline[y0:y1, x0:x1] = blob.mask
+    outline = outline_in_image(blob, body.shape)
     return int(np.count_nonzero(body & ~outline)), float(blob.centroid_raw[1] - tt.centroid_left[1])
 
 

@@ -401,10 +401,9 @@ class Verifier(RegionMatcher):
         m_right = self.right_key_at(frame, box, d_hint)
         both = m_left & m_right
         if self.sub.left_background(frame.gimbal) is None:  # the cameras move
-            head = with_head(both)
-            if rest is not None:  # the head, or more of the body, among the box's other pixels both keys see
-                more = with_head(both | (rest & m_right))
-                head = more if more[largest_component(both)].all() else head  # the same body, not another
+            head = with_head(both if rest is None else both | (rest & m_right))  # the head, or more of the
+            if rest is not None and not head[largest_component(both)].all():  # body; not another thing
+                head = with_head(both)
             feet = feet_at_ground_depth(head, m_left | m_right, cm.disparity, cm.valid, d_hint)
             inferred = feet is not head
             obj = with_head(feet) if inferred else head
