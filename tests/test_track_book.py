@@ -4,6 +4,7 @@ their writing (flush, on a real SQLite file): a track only once it was seen in M
 
 from __future__ import annotations
 
+import asyncio
 import math
 from pathlib import Path
 from typing import Any
@@ -100,3 +101,33 @@ def test_a_track_is_written_once_seen_in_enough_frames_and_a_short_one_never(tmp
     assert points[0].t == pytest.approx(t0)
     book.forget_before(t0 + 100.0)
     assert book.tracks == {}  # the short one too: it would never be written
+
+
+def test_tracks_wait_in_memory_while_the_database_is_locked_and_are_written_after(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture) -> None:
+    # another connection holds the write lock past the busy timeout (shortened here): nothing is written,
+    # nothing is lost, the failure is one warning line (a device condition, not a bug), and the next flush
+    # writes everything
+    import sqlite3
+
+    from server.db import engine as db_engine
+    from server.services.tracks import TrackWriter
+
+    monkeypatch.setattr(db_engine, "BUSY_TIMEOUT_MS", 200)
+    url = f"sqlite:///{tmp_path / 'tmeye.db'}"
+    upgrade(url)
+    writer = TrackWriter(None, session_factory(make_engine(url)), sample_hz=10.0, flush_s=1.0)  # type: ignore[arg-type]
+    _feed(writer.book, _walk([(1.4, 2.0)], sigma=0.0))
+    holder = sqlite3.connect(tmp_path / "tmeye.db")
+    holder.execute("BEGIN IMMEDIATE")
+    with caplog.at_level("WARNING", logger="tmeye.tracks"):
+        asyncio.run(writer._flush())
+    assert writer.errors == 1 and writer.written == 0
+    assert [r.levelname for r in caplog.records] == ["WARNING"]
+    assert caplog.records[0].exc_info is None and "database is locked" in caplog.records[0].getMessage()
+    holder.rollback()
+    holder.close()
+    asyncio.run(writer._flush())
+    with session_factory(make_engine(url))() as db:
+        assert [t.detections for t in db.scalars(select(Track))] == [60]
+        assert len(list(db.scalars(select(TrackPoint)))) == writer.written == 20

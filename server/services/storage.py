@@ -9,6 +9,7 @@ import time
 from pathlib import Path
 
 from sqlalchemy import delete, exists, select
+from sqlalchemy.exc import OperationalError
 from sqlalchemy.orm import Session, sessionmaker
 
 from server.db.models import EvidenceLock, RecordedFrame, Segment
@@ -61,8 +62,11 @@ class RetentionTask:
             try:
                 self.deleted += len(await asyncio.to_thread(apply_retention, self.sessions, self.data_dir,
                                                             self.policy))
-            except Exception:
+            except Exception as exc:  # tried again at the next interval
+                # a locked, read-only or full database is a device condition, not a bug: one line
                 self.errors += 1
-                log.exception("retention failed (tried again at the next interval)")
+                (log.warning if isinstance(exc, OperationalError) else log.exception)(
+                    "retention failed (tried again at the next interval): %s: %s", type(exc).__name__,
+                    (str(exc).splitlines() or [""])[0])
             self.last_run = time.time()
             await asyncio.sleep(self.interval_s)

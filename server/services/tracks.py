@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from sqlalchemy import insert, select
+from sqlalchemy.exc import OperationalError
 from sqlalchemy.orm import Session, sessionmaker
 
 from server.db.models import Track, TrackPoint
@@ -169,12 +170,14 @@ class TrackWriter:
         try:
             self.written += await asyncio.to_thread(flush, self.sessions, self.run_id, self.book)
             self.book.forget_before(time.time() - 60.0)
-        except Exception as exc:
+        except Exception as exc:  # kept in memory, retried at the next flush
+            # a locked (busy past its timeout), read-only or full database is a device condition, not a bug:
+            # one line; anything else gets its traceback the first time
             self.errors += 1
-            if self.errors == 1:
-                log.exception("writing tracks failed (kept in memory, retried at the next flush)")
-            else:
-                log.warning("writing tracks failed again (%d times): %s", self.errors, str(exc).splitlines()[0])
+            bug = self.errors == 1 and not isinstance(exc, OperationalError)
+            (log.exception if bug else log.warning)(
+                "writing tracks failed (%d times; kept in memory, retried at the next flush): %s: %s",
+                self.errors, type(exc).__name__, (str(exc).splitlines() or [""])[0])
 
 
 def list_tracks(db: Session, start: float | None, end: float | None, limit: int,
