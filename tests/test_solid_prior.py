@@ -363,17 +363,21 @@ def test_a_person_whose_lower_part_is_hidden_is_placed_from_its_top() -> None:
 def test_a_person_hidden_below_gets_no_move_along_x_for_its_hidden_part(monkeypatch) -> None:  # type: ignore[no-untyped-def]
     # foliage:body, frame 105: a walker behind the bush, its top seen. visibility.cuts finds its bottom cut
     # and a move of the centroid along x across it (the hidden part taken to go on beyond the bush's edge
-    # away from the centroid); an upright body's hidden legs stand under what is seen, so none counts. A
-    # body the prior does not take for upright keeps the move.
-    found = []
-    real = partly_seen.cuts
+    # away from the centroid); an upright body's hidden legs stand under what is seen, so none counts, but
+    # for the pull of what shows of them past the bush (partly_seen.legs_aside_px, 0.07 px). A body the
+    # prior does not take for upright keeps the move.
+    found, pulls = [], []
+    real, real_pull = partly_seen.cuts, partly_seen.legs_aside_px
     monkeypatch.setattr(partly_seen, "cuts", lambda *a, **k: found.append(real(*a, **k)) or found[-1])
+    monkeypatch.setattr(partly_seen, "legs_aside_px", lambda *a: pulls.append(real_pull(*a)) or pulls[-1])
     pipe, sf, res = run_frames("foliage:body", 105)
     (det,) = res.detections
     found.clear()
+    pulls.clear()
     terms = pipe._sigma_terms(sf.frame, det.blob, [det.blob])
     assert terms.hidden_below and found[-1].sides[3] and found[-1].skew[0] > 0.5
-    assert terms.cut_px[0] == 0.0 and terms.cut_px[1] > 10.0
+    assert len(pulls) == 1 and pulls[0] < 0.2
+    assert terms.cut_px[0] == pytest.approx(pulls[0], abs=1e-12) and terms.cut_px[1] > 10.0
     pipe.localizer.solid = SolidPrior(upright_aspect=10.0)  # not upright: the move stands
     assert math.isclose(pipe._sigma_terms(sf.frame, det.blob, [det.blob]).cut_px[0], found[-1].skew[0],
                         rel_tol=1e-9)

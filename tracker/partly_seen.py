@@ -55,6 +55,8 @@ def partly_seen(b: Blob, others: list[tuple[Box, BoolA, float]], upright: bool,
     hidden_below = seen.bottom_by_background and not top
     if hidden_below and upright:  # a person's hidden lower part stands under what is seen
         sx = 0.0
+    if upright and seen.hidden_from is not None:  # but a leg seen beside an occluder stands to one side
+        sx = float(np.hypot(sx, legs_aside_px(mask[:n], seen.hidden_from)))
     solid, baseline_m = person
     _, _, w, h = cv2.boundingRect(b.mask.view(np.uint8))  # the outline's extent (px)
     if upright and (left or right) and solid is not None:  # the rest above or below it
@@ -66,3 +68,17 @@ def partly_seen(b: Blob, others: list[tuple[Box, BoolA, float]], upright: bool,
         whole = (whole[0] and rx is None, whole[1] and ry is None)
     cut = (float(np.sqrt(px * px + sx * sx + ux * ux)), float(np.sqrt(py * py + sy * sy + uy * uy)))
     return hidden_below, cut, whole
+
+
+def legs_aside_px(mask: BoolA, hidden_from: int) -> float:
+    """How far (px) a person's centroid along x may lie off its centre where a nearer background hides its
+    lower part from row `hidden_from` of `mask` (its outline, bool (h, w)) down and some of what lies there is
+    seen beside the occluder (a leg past its edge): its hidden legs stand under what is seen above, so the
+    pixels seen below move the centroid by their share of the whole times their mean's offset along x from
+    the mean of the rows above, n_low |x̄_low - x̄_up| / n. 0 where nothing shows below or above."""
+    ys, xs = np.nonzero(mask)
+    low = ys >= hidden_from
+    n_low = int(np.count_nonzero(low))
+    if n_low == 0 or n_low == xs.size:
+        return 0.0
+    return n_low * abs(float(xs[low].mean()) - float(xs[~low].mean())) / xs.size
