@@ -27,7 +27,7 @@ def _pair(z_m: float, extent_px: tuple[float, float]):  # type: ignore[no-untype
     flat = Localizer(rect).locate(*args)
     prior = SolidPrior(0.5, 0.3, rim_sigma_px=0.0, upright_sigma=0.0, upright_ratio=0.5, upright_ratio_sigma=0.3,
                        upright_x_sigma=0.0, upright_swing_sigma=0.0, wide_ratio=0.5, wide_ratio_sigma=0.3,
-                       upright_shift=0.0)
+                       upright_shift=0.0, upright_depth_m2=0.0)
     # upright and wide bodies' own terms apart (tested below)
     solid = Localizer(rect, solid=prior).locate(*args)
     return flat, solid, rect
@@ -511,3 +511,25 @@ def test_a_person_seen_in_part_where_no_cut_was_found_may_be_anywhere_about_it()
     x, _ = prior.unseen_rest_px(16.0, 27.0, 16.5, 0.3, (False, True))
     assert x == pytest.approx((0.5 * stature - 16.0) / 12**0.5)
     assert prior.unseen_rest_px(9.0, 34.0, 16.5, 0.0, (False, False)) == (None, None)
+
+
+def test_an_upright_bodys_depth_widens_its_x_sigma_by_k_f_over_z_squared() -> None:
+    # a box-like cross-section's silhouette lies off its centre's direction by up to P z_r / Z² (rad): its
+    # 1-σ in px is k f / Z², the same at any height seen, along x alone, for an upright body alone
+    rect = Rectifier(default_rig())
+    prior = SolidPrior()
+    for z_m in (3.0, 10.0):
+        d = rect.f * rect.rig.baseline / z_m
+        assert prior.upright_depth_px(d, rect.rig.baseline, rect.f) == pytest.approx(0.017 * rect.f / z_m**2)
+    assert prior.upright_depth_px(20.0, 0.0, rect.f) == 0.0
+    centre = np.array([rect.rig.left.size[0] / 2.0, rect.rig.left.size[1] / 2.0])
+    d = rect.f * rect.rig.baseline / 3.0
+    args = (centre, d, 0.05, 4000, None, (0.0, 0.0))
+    without = SolidPrior(upright_depth_m2=0.0)
+    for extent, upright in (((60.0, 330.0), True), ((330.0, 200.0), False)):
+        a = Localizer(rect, solid=prior).locate(*args, extent)
+        b = Localizer(rect, solid=without).locate(*args, extent)
+        # k f / Z² px at the face 3 m away is k / Z m across, seen from the origin at the centre's range
+        grows = (a.sigma_theta**2 - b.sigma_theta**2) * float(np.linalg.norm(a.rig)) ** 2
+        assert grows == pytest.approx((0.017 / 3.0) ** 2 if upright else 0.0, rel=0.02, abs=1e-12)
+        assert a.sigma_phi == pytest.approx(b.sigma_phi, rel=1e-6)

@@ -167,7 +167,8 @@ class Localizer:
             whole = gait if from_top is None or top_fused else None  # the still share: of standing bodies seen whole
             s_up = self.solid.upright_y_sigma(h, whole, warped) if upright else 0.0
             if upright:  # x: its limbs and, while the cameras move (no rim contrast), the rim too
-                S[0, 0] += self.solid.upright_x_var(h, swing, whole) + (rx**2 if rim_px is None else 0.0)
+                S[0, 0] += self.solid.upright_x_var(h, swing, whole) + (rx**2 if rim_px is None else 0.0) \
+                    + self.solid.upright_depth_px(disparity, self.rect.b, self.rect.f) ** 2
             else:  # x: the rim
                 S[0, 0] += rx**2
             # y from the centroid: max(extra, upright) and the rim; from the top: the top's own edge and the
