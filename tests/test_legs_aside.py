@@ -73,3 +73,11 @@ def test_the_walker_behind_the_crate_on_the_endless_scene(with_term: bool, monke
     z = (det.loc.theta - truth) / det.loc.sigma_theta
     assert abs(np.degrees(det.loc.theta - truth)) > 0.3  # the centroid is pulled to the leg either way
     assert (abs(z) < 2.0) if with_term else (abs(z) > 5.0)
+
+
+def test_an_occluder_above_the_centroid_or_at_the_top_is_no_occluder_across_the_legs() -> None:
+    valid = np.ones((120, 60), bool)
+    for rows in (slice(0, 40), slice(0, 12)):  # beside the torso; over the head
+        bg = np.full((120, 60), 15.0, np.float32)
+        bg[rows, :] = 30.0
+        assert cuts(_walker("right"), (200, 200, 260, 320), SIZE, 25.0, bg, valid, CFG).hidden_from is None

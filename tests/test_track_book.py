@@ -131,3 +131,23 @@ def test_tracks_wait_in_memory_while_the_database_is_locked_and_are_written_afte
     with session_factory(make_engine(url))() as db:
         assert [t.detections for t in db.scalars(select(Track))] == [60]
         assert len(list(db.scalars(select(TrackPoint)))) == writer.written == 20
+
+
+def test_a_bug_after_a_locked_database_still_logs_its_traceback(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture) -> None:
+    import server.services.tracks as tracks
+    from sqlalchemy.exc import OperationalError
+
+    writer = tracks.TrackWriter(None, None, sample_hz=10.0, flush_s=1.0)  # type: ignore[arg-type]
+    errors = iter([OperationalError("UPDATE tracks", {}, Exception("database is locked")), ValueError("a bug"),
+                   ValueError("the same bug")])
+
+    def failing(*_a: object) -> int:
+        raise next(errors)
+
+    monkeypatch.setattr(tracks, "flush", failing)
+    with caplog.at_level("WARNING", logger="tmeye.tracks"):
+        for _ in range(3):
+            asyncio.run(writer._flush())
+    assert [(r.levelname, r.exc_info is not None) for r in caplog.records] == [
+        ("WARNING", False), ("ERROR", True), ("WARNING", False)]

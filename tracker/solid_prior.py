@@ -155,12 +155,16 @@ class SolidPrior:
       both 70 % (0.87). A body whose cross-section is not round (a person's torso, a box of half-width p =
       0.19 m and half-depth q = 0.11 m) shows a silhouette whose centre lies off its centre's direction by
       perspective: the box's extreme corners are at different depths, so the mean of their directions moves
-      by P z_r / Z² (rad; P the half-width seen across, z_r the depth of the corner that bounds it), which over
-      headings varies as (p² + q²)/2 · cos(2α + const), rms (p² + q²) / (2√2) = `upright_depth_m2` 0.017 m²:
-      a 1-σ along x of k f / Z² px (upright_depth_px), 1.1 px at 3 m, 0.1 px at 10 m. It is derived from the
-      simulator's person, not fitted; with it, a and b were refitted (Gaussian maximum likelihood over 3,944
-      upright frames of walk, illumination, foliage, pan, two-targets and endless, the last once a leg seen
-      beside an occluder had its own term, tracker.partly_seen.legs_aside_px): a 0.175 % and b 0.255 %,
+      by P z_r / Z² (rad; P the half-width seen across, z_r the signed depth, m, of the corner that bounds it):
+      with α the heading from the line of sight, pq cos 2α + (q² - p²)/2 · sin 2α on α in (0°, 90°) and the
+      same with -α on the other quadrant, amplitude (p² + q²)/2, rms over headings (p² + q²) / (2√2) =
+      `upright_depth_m2` 0.017 m² (square-on and side-on it turns over, within about p / Z of the heading): a
+      1-σ along x of k f / Z² px (upright_depth_px), 1.1 px at 3 m, 0.1 px at 10 m. It is derived from the
+      simulator's person's torso, not fitted, and from the bounding corners alone: eq. (10) weighs the nearer
+      columns, taller in the image, a little more (a full-height box, about 0.020 m²). With it, a and b were
+      refitted (Gaussian maximum likelihood over 3,944 upright frames of walk, illumination, foliage, pan,
+      two-targets and endless, the last once a leg seen beside an occluder had its own term,
+      tracker.partly_seen.legs_aside_px): a 0.175 % and b 0.255 %,
       log-likelihood 141 higher than the best a and b without it (0.198 % and 0.324 %). eval --all: the
       azimuth within 1σ walk 0.743 -> 0.717, illumination 0.760 -> 0.740, foliage 0.697 -> 0.657, pan 0.767
       -> 0.688, endless 0.795 -> 0.756, two-targets 0.920 -> 0.903 (its slow walker's errors are half those
@@ -238,8 +242,8 @@ class SolidPrior:
 
     def upright_depth_px(self, disparity: float, baseline_m: float, f_px: float) -> float:
         """An upright body's silhouette's 1-σ (px) along x about its centre's direction for the depth of its
-        cross-section: k f / Z² with Z = f b / d (k = upright_depth_m2, d the disparity, b the baseline, f the
-        focal length, px); 0 without a baseline."""
+        cross-section: k f / Z² with Z = f b / d (k = upright_depth_m2, m²; d the rectified disparity and f the
+        focal length, px; b the baseline, m; Z the seen face's depth, m); 0 without a baseline."""
         if baseline_m <= 0 or f_px <= 0:
             return 0.0
         return self.upright_depth_m2 * disparity * disparity / (baseline_m * baseline_m * f_px)

@@ -49,9 +49,10 @@ class VisibilityConfig:
     background must be than the farthest behind its lowest four pixels to hide it (the ground rises about
     1.0 px over those six rows; tracker.bottom_edge.stepped_below). aside_px, aside_share: how much nearer
     (px, and as a share of the target's disparity, the larger) a background beside or below a target's lower
-    half must be to count as an occluder across its legs (Cuts.hidden_from): the ground beside a walker's
-    feet reads up to 2.4 px nearer than the walker's disparity at 3 m (walk:body, 1.2 px at 39 px), the
-    crates before walkers on the endless scene 4.6 to 15 px nearer at 15 to 25 px."""
+    half must be to count as an occluder across its legs (Cuts.hidden_from): on walk:body the ground beside
+    a walker's feet reads 1.2 px nearer than the walker's disparity at 4.5 m (39 px) and up to 2.8 px at 7.6
+    m (24 px), over the floor there (the term then adds 0.01-0.3 px); the crates before walkers on the
+    endless scene are 4.6 to 15 px nearer at 15 to 25 px."""
 
     kappa: float = 0.4
     nearer_px: float = 0.5
@@ -176,10 +177,7 @@ def cuts(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, int], dis
         hiding[ys, xs] = hid | (lev & by_bg[k])  # a level background only on a side it cuts (not the ground)
         hids.append(hid)
     clearly = bg_valid & (bg_disparity > disparity + max(cfg.aside_px, cfg.aside_share * disparity))
-    low = [ys[hid & clearly[ys, xs] & (ys > centre[1])]
-           for k, ((ys, xs), hid) in enumerate(zip(ring, hids, strict=True)) if k != 2]
-    low_rows = np.concatenate(low)
-    hidden_from = int(low_rows.min()) if low_rows.size else None
+    hidden_from = _hidden_from(ring, hids, clearly, centre[1])
     tip = convex_tip(mask, hidden | level, cfg.convex_solidity, cfg.tip_rows) if by_bg[3] and not cut[3] else None
     by_bg[3] &= tip is None
     for k in range(4):
@@ -190,6 +188,18 @@ def cuts(mask: BoolA, box: tuple[int, int, int, int], size: tuple[int, int], dis
         sx, sy = (abs(sx) if by_bg[2] or by_bg[3] else 0.0, abs(sy) if by_bg[0] or by_bg[1] else 0.0)
         skew = (float(np.hypot(skew[0], sx)), float(np.hypot(skew[1], sy)))
     return Cuts((cut[0], cut[1], cut[2], cut[3]), skew, by_bg[3], hidden_from)
+
+
+def _hidden_from(ring: list[tuple[NDArray[np.intp], NDArray[np.intp]]], hids: list[BoolA], clearly: BoolA,
+                 centre_y: float) -> int | None:
+    """Cuts.hidden_from: the highest row of the ring pixels (each side's rows and columns, left, right, top,
+    bottom) below centre_y, on the left, right or bottom side, that hide the target (hids, each side's) on a
+    background clearly nearer (`clearly`, over the box); None: none. The right camera's shadow band beside a
+    nearer thing does not count: the ring pixel itself must be nearer."""
+    low = [ys[hid & clearly[ys, xs] & (ys > centre_y)] for k, ((ys, xs), hid) in enumerate(zip(ring, hids, strict=True))
+           if k != 2]
+    rows = np.concatenate(low)
+    return int(rows.min()) if rows.size else None
 
 
 def _hidden_shift(hid: BoolA, centre: tuple[float, float], extent: tuple[int, int], area: float, kappa: float

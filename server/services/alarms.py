@@ -180,7 +180,7 @@ class AlarmService:
                     bug = self._store_failures == 0 and not isinstance(exc, OperationalError)
                     (log.exception if bug else log.warning)(
                         "storing %d alarm transitions failed (kept, retried): %s: %s", len(self._unstored),
-                        type(exc).__name__, str(exc).splitlines()[0])
+                        type(exc).__name__, (str(exc).splitlines() or [""])[0])
                     self._store_failures += 1
                 else:
                     self._store_failures = 0

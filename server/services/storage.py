@@ -63,7 +63,7 @@ class RetentionTask:
                 self.deleted += len(await asyncio.to_thread(apply_retention, self.sessions, self.data_dir,
                                                             self.policy))
             except Exception as exc:  # tried again at the next interval
-                # a locked, read-only or full database is a device condition, not a bug: one line
+                # the database failing (OperationalError: locked, read-only, full) is a device condition: one line
                 self.errors += 1
                 (log.warning if isinstance(exc, OperationalError) else log.exception)(
                     "retention failed (tried again at the next interval): %s: %s", type(exc).__name__,

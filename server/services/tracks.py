@@ -145,6 +145,7 @@ class TrackWriter:
         self.run_id = time.strftime("%Y%m%dT%H%M%S", time.gmtime()) + f"-{int(time.time() * 1000) % 1000:03d}"
         self.written = 0
         self.errors = 0
+        self._traced = False  # a failure that is not the database's was logged with its traceback
 
     async def run(self) -> None:
         # no wake-up per frame: every flush_s the frames queued meanwhile are folded in and written at once
@@ -171,10 +172,11 @@ class TrackWriter:
             self.written += await asyncio.to_thread(flush, self.sessions, self.run_id, self.book)
             self.book.forget_before(time.time() - 60.0)
         except Exception as exc:  # kept in memory, retried at the next flush
-            # a locked (busy past its timeout), read-only or full database is a device condition, not a bug:
-            # one line; anything else gets its traceback the first time
+            # the database failing (OperationalError: locked past its busy timeout, read-only, full, its disk)
+            # is a device condition, not a bug: one line; anything else gets its traceback the first time
             self.errors += 1
-            bug = self.errors == 1 and not isinstance(exc, OperationalError)
+            bug = not self._traced and not isinstance(exc, OperationalError)
+            self._traced |= bug
             (log.exception if bug else log.warning)(
                 "writing tracks failed (%d times; kept in memory, retried at the next flush): %s: %s",
                 self.errors, type(exc).__name__, (str(exc).splitlines() or [""])[0])
