@@ -135,8 +135,9 @@ def test_tracks_wait_in_memory_while_the_database_is_locked_and_are_written_afte
 
 def test_a_bug_after_a_locked_database_still_logs_its_traceback(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture) -> None:
-    import server.services.tracks as tracks
     from sqlalchemy.exc import OperationalError
+
+    import server.services.tracks as tracks
 
     writer = tracks.TrackWriter(None, None, sample_hz=10.0, flush_s=1.0)  # type: ignore[arg-type]
     errors = iter([OperationalError("UPDATE tracks", {}, Exception("database is locked")), ValueError("a bug"),
