@@ -95,13 +95,13 @@ def test_a_faint_sides_lost_band_is_undone_towards_it() -> None:
     assert rim_shift_px((0.5, 0.5, 0.2, 0.2), mask, CFG, still=True) == (0.0, 0.0)
 
 
-def test_a_still_balls_faint_side_loses_a_band_of_fixed_width_a_persons_a_share_of_its_size() -> None:
+def test_a_still_bodys_faint_side_loses_a_band_of_fixed_width_along_x_a_share_of_its_size_along_y() -> None:
     shares = (0.0, 1.0, 0.0, 0.0)  # the right side's rim all faint
     small, large = np.ones((20, 20), bool), np.ones((120, 120), bool)
-    for mask in (small, large):  # a ball, the cameras still: half the fixed band, whatever its size
-        assert rim_shift_px(shares, mask, CFG, still=True)[0] == pytest.approx(0.5 * CFG.ball_band_still_px)
-    person = [rim_shift_px(shares, m, CFG, still=True, upright=True)[0] for m in (small, large)]
-    assert person[1] == pytest.approx(6.0 * person[0]) and person[0] == pytest.approx(0.5 * CFG.band_still[0] * 20)
+    for mask in (small, large):  # a ball or a person, the cameras still: half the fixed band, whatever its size
+        assert rim_shift_px(shares, mask, CFG, still=True)[0] == pytest.approx(0.5 * CFG.band_still_px)
+    bottom = [rim_shift_px((0.0, 0.0, 0.0, 1.0), m, CFG, still=True)[1] for m in (small, large)]
+    assert bottom[1] == pytest.approx(6.0 * bottom[0]) and bottom[0] == pytest.approx(0.5 * CFG.band_still_y * 20)
     # the cameras moving (the stereo residual's shares): a share of the size, along y alone
     assert rim_shift_px(shares, large, CFG) == (0.0, 0.0)
     assert rim_shift_px((0.0, 0.0, 0.0, 1.0), large, CFG)[1] == pytest.approx(0.5 * CFG.band[1] * 120)

@@ -294,7 +294,7 @@ class Pipeline:
             shares = faint_shares(b.mask, b.box, frame.left, model[0], gain, self.rim_contrast)
         corrected = (not wide, not (wide or person))  # a curved rim's band (rim_contrast.rim_shift_px)
         return (rim_sigma_px(shares, self.rim_contrast, corrected, model is None),
-                rim_shift_px(shares, b.mask, self.rim_contrast, corrected, model is not None, person))
+                rim_shift_px(shares, b.mask, self.rim_contrast, corrected, model is not None))
 
     def between_frames(self, deadline: float) -> None:
         """In real time, after a frame's results are out and before the next frame is due (`deadline`,
