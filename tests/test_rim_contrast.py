@@ -102,6 +102,9 @@ def test_a_still_bodys_faint_side_loses_a_band_of_fixed_width_along_x_a_share_of
         assert rim_shift_px(shares, mask, CFG, still=True)[0] == pytest.approx(0.5 * CFG.band_still_px)
     bottom = [rim_shift_px((0.0, 0.0, 0.0, 1.0), m, CFG, still=True)[1] for m in (small, large)]
     assert bottom[1] == pytest.approx(6.0 * bottom[0]) and bottom[0] == pytest.approx(0.5 * CFG.band_still_y * 20)
+    # a person's faint bottom (its lower legs over the ground) loses a band of its own, down
+    legs = rim_shift_px((0.0, 0.0, 0.0, 1.0), large, CFG, still=True, person=True)[1]
+    assert legs == pytest.approx(0.5 * CFG.person_band_still_y * 120) and legs > bottom[1]
     # the cameras moving (the stereo residual's shares): a share of the size, along y alone
     assert rim_shift_px(shares, large, CFG) == (0.0, 0.0)
     assert rim_shift_px((0.0, 0.0, 0.0, 1.0), large, CFG)[1] == pytest.approx(0.5 * CFG.band[1] * 120)

@@ -276,9 +276,9 @@ class Pipeline:
         SolidPrior's fixed rim term). cm: the background's correspondences over the blob's box. Second: the
         true silhouette's centroid's offset from the outline's (px, x and y; rim_contrast.rim_shift_px), where
         a curved rim loses a band on its faint sides: along x but for a wide body (a vehicle's flat faces),
-        along y for neither a wide nor an upright one (a person's top and bottom are its head and feet, whose
-        losses tracker.segmentation's terms describe; undone, the walkers' y errors' rms moved by -4 to +4 %,
-        the balls' by -59 %); (0, 0) where there is no 1-σ."""
+        along y but for a wide one (a person's faint bottom is its lower legs over the ground, a band of its
+        own: rim_contrast.RimContrastConfig.person_band_still_y; the 1-σ along y stays the full side's for
+        a person, whose head and feet tracker.segmentation's terms describe); (0, 0) where there is no 1-σ."""
         if self.localizer.solid is None:
             return None, (0.0, 0.0)
         upright, wide = self._seen_as(b)
@@ -293,8 +293,9 @@ class Pipeline:
             gain = self.temporal.gain or b.gain
             shares = faint_shares(b.mask, b.box, frame.left, model[0], gain, self.rim_contrast)
         corrected = (not wide, not (wide or person))  # a curved rim's band (rim_contrast.rim_shift_px)
+        undone = (not wide, not wide)  # and a person's faint bottom, its legs over the ground
         return (rim_sigma_px(shares, self.rim_contrast, corrected, model is None),
-                rim_shift_px(shares, b.mask, self.rim_contrast, corrected, model is not None))
+                rim_shift_px(shares, b.mask, self.rim_contrast, undone, model is not None, person))
 
     def between_frames(self, deadline: float) -> None:
         """In real time, after a frame's results are out and before the next frame is due (`deadline`,
