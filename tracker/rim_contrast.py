@@ -268,7 +268,10 @@ def rim_shift_px(shares: tuple[float, float, float, float], mask: BoolA, cfg: Ri
     _, _, bw, bh = cv2.boundingRect(mask.view(np.uint8))
     size = float(np.sqrt(bw * bh))
     left, right, top, bottom = shares
-    band_x = cfg.band_still_px if still else cfg.band[0] * size
-    band_y = ((cfg.person_band_still_y if person else cfg.band_still_y) if still else cfg.band[1]) * size
+    if still:
+        band_x = cfg.band_still_px
+        band_y = (cfg.person_band_still_y if person else cfg.band_still_y) * size
+    else:
+        band_x, band_y = cfg.band[0] * size, cfg.band[1] * size
     return (0.5 * band_x * (right - left) if corrected[0] else 0.0,
             0.5 * band_y * (bottom - top) if corrected[1] else 0.0)

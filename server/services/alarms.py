@@ -25,7 +25,6 @@ from pathlib import Path
 from typing import Any
 
 from sqlalchemy import select, text
-from sqlalchemy.exc import OperationalError
 from sqlalchemy.orm import Session, sessionmaker
 
 from server.alarms.conditions import Snapshot
@@ -37,6 +36,7 @@ from server.services import alarm_store as store
 from server.services import audit
 from server.services.errors import Conflict, NotFound
 from server.services.events import EventBus
+from server.services.faults import FailureLog, brief
 from tmeye.runtime import FrameEvent, Runtime
 
 log = logging.getLogger("tmeye.alarms")
@@ -77,7 +77,7 @@ class AlarmService:
         self._write_fault: str | None = None
         self._unstored: list[Transition] = []
         self._store_at = 0.0
-        self._store_failures = 0
+        self._failures = FailureLog(log)
         self._operators: dict[str, float] | None = None
         self._last_t = 0.0
 
@@ -173,17 +173,11 @@ class AlarmService:
                 try:
                     self._commit(self._unstored, None, None)
                     self._unstored = []
-                except Exception as exc:  # kept; tried again in a second
-                    # a full, read-only or locked database is a device fault (the database alarm), not a bug: one
-                    # line; anything else gets its traceback the first time
+                except Exception as exc:  # kept; tried again in a second (a full, read-only or locked
+                    # database is a device fault, the database alarm's)
                     self._store_at = time.monotonic() + STORE_RETRY_S
-                    bug = self._store_failures == 0 and not isinstance(exc, OperationalError)
-                    (log.exception if bug else log.warning)(
-                        "storing %d alarm transitions failed (kept, retried): %s: %s", len(self._unstored),
-                        type(exc).__name__, (str(exc).splitlines() or [""])[0])
-                    self._store_failures += 1
-                else:
-                    self._store_failures = 0
+                    self._failures.log(exc, "storing %d alarm transitions failed (kept, retried): %s",
+                                       len(self._unstored), brief(exc))
         for tr in trs:
             if tr.kind == "activated":
                 for hook in self.on_activated:

@@ -25,6 +25,7 @@ from sqlalchemy.exc import OperationalError
 from sqlalchemy.orm import Session, sessionmaker
 
 from server.services import segments
+from server.services.faults import FailureLog
 from tmeye.media.encoder import CLOCK_HZ, EncodedFrame
 from tmeye.media.fmp4 import SegmentMuxer
 from tmeye.media.pipeline import CAMERAS, MediaPipeline
@@ -167,6 +168,7 @@ class Recorder:
         self.config = config
         self.cameras = {c: CameraRecorder(c, self) for c in CAMERAS}
         self.fault: str | None = None
+        self._failures = FailureLog(log, (OSError, OperationalError), logging.ERROR)
         self.unfinished: list[int] = []  # segments whose close failed: repaired (or dropped) when possible
         self._retry_s = 0.0
         self._retry_at = 0.0
@@ -238,10 +240,8 @@ class Recorder:
         if first:
             self._retry_s = min(RETRY_MAX_S, max(DISK_CHECK_S, 2 * self._retry_s))
             self._retry_at = time.monotonic() + self._retry_s
-        # a full disk or a database that cannot write is a device fault (the recording alarm): one line; anything
-        # else gets its traceback the first time
-        bug = first and not isinstance(exc, OSError | OperationalError)
-        (log.exception if bug else log.error)("%s (retry in %.0f s)", self.fault, self._retry_s)
+        # a full disk or a database that cannot write is a device fault (the recording alarm)
+        self._failures.log(exc, "%s (retry in %.0f s)", self.fault, self._retry_s)
         for cam in self.cameras.values():
             if cam.muxer is not None:
                 cam.close()

@@ -9,10 +9,10 @@ import time
 from pathlib import Path
 
 from sqlalchemy import delete, exists, select
-from sqlalchemy.exc import OperationalError
 from sqlalchemy.orm import Session, sessionmaker
 
 from server.db.models import EvidenceLock, RecordedFrame, Segment
+from server.services.faults import FailureLog, brief
 from server.services.retention import Policy, SegmentInfo, to_delete
 
 log = logging.getLogger("tmeye.retention")
@@ -56,6 +56,7 @@ class RetentionTask:
         self.deleted = 0
         self.errors = 0
         self.last_run: float | None = None
+        self._failures = FailureLog(log)
 
     async def run(self) -> None:
         while True:
@@ -63,10 +64,7 @@ class RetentionTask:
                 self.deleted += len(await asyncio.to_thread(apply_retention, self.sessions, self.data_dir,
                                                             self.policy))
             except Exception as exc:  # tried again at the next interval
-                # the database failing (OperationalError: locked, read-only, full) is a device condition: one line
                 self.errors += 1
-                (log.warning if isinstance(exc, OperationalError) else log.exception)(
-                    "retention failed (tried again at the next interval): %s: %s", type(exc).__name__,
-                    (str(exc).splitlines() or [""])[0])
+                self._failures.log(exc, "retention failed (tried again at the next interval): %s", brief(exc))
             self.last_run = time.time()
             await asyncio.sleep(self.interval_s)

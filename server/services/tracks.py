@@ -14,11 +14,11 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from sqlalchemy import insert, select
-from sqlalchemy.exc import OperationalError
 from sqlalchemy.orm import Session, sessionmaker
 
 from server.db.models import Track, TrackPoint
 from server.services.errors import NotFound
+from server.services.faults import FailureLog, brief
 from tmeye.runtime import FrameEvent, Runtime
 
 log = logging.getLogger("tmeye.tracks")
@@ -145,7 +145,7 @@ class TrackWriter:
         self.run_id = time.strftime("%Y%m%dT%H%M%S", time.gmtime()) + f"-{int(time.time() * 1000) % 1000:03d}"
         self.written = 0
         self.errors = 0
-        self._traced = False  # a failure that is not the database's was logged with its traceback
+        self._failures = FailureLog(log)
 
     async def run(self) -> None:
         # no wake-up per frame: every flush_s the frames queued meanwhile are folded in and written at once
@@ -172,14 +172,9 @@ class TrackWriter:
             self.written += await asyncio.to_thread(flush, self.sessions, self.run_id, self.book)
             self.book.forget_before(time.time() - 60.0)
         except Exception as exc:  # kept in memory, retried at the next flush
-            # the database failing (OperationalError: locked past its busy timeout, read-only, full, its disk)
-            # is a device condition, not a bug: one line; anything else gets its traceback the first time
             self.errors += 1
-            bug = not self._traced and not isinstance(exc, OperationalError)
-            self._traced |= bug
-            (log.exception if bug else log.warning)(
-                "writing tracks failed (%d times; kept in memory, retried at the next flush): %s: %s",
-                self.errors, type(exc).__name__, (str(exc).splitlines() or [""])[0])
+            self._failures.log(exc, "writing tracks failed (%d times; kept in memory, retried at the next flush): %s",
+                               self.errors, brief(exc))
 
 
 def list_tracks(db: Session, start: float | None, end: float | None, limit: int,
