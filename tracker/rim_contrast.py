@@ -38,9 +38,9 @@ faint side loses, 1.06 % and 1.7 % of √(w h)). rms x error walk 0.548 -> 0.342
 0.249, occlusion's car 1.009 -> 1.010 (a vehicle's flat faces lose no such band: not undone for a wide
 body); along y approach 0.466 -> 0.189 px and manoeuvre 0.344 -> 0.141 (the balls), the walkers' 1.03-
 1.47 px by -4 to +4 % (a person's top and bottom are its head and feet: not undone for an upright
-body). Where it is undone, a side's 1-σ is `corrected_side_px` (1.4 px along x, 0.9 along y; side_px
-elsewhere): the spread left, set by `tmeye eval --all` (along y 1.0 put manoeuvre:body's range within 1σ
-past its band, 1.2 its elevation NEES; 1.7 left manoeuvre's elevation 1-σ about 1.6 times too wide,
+body). Where it is undone, a side's 1-σ is `corrected_side_px` (0.7 px along x since 2026-12-06, below; 0.9
+along y; side_px elsewhere): the spread left, set by `tmeye eval --all` (along y 1.0 put manoeuvre:body's
+range within 1σ past its band, 1.2 its elevation NEES; 1.7 left manoeuvre's elevation 1-σ about 1.6 times too wide,
 NEES 0.40). `tmeye eval --all`: azimuth RMSE against the seen surface walk:body
 0.073 -> 0.061°, illumination 0.076 -> 0.063°, foliage 0.077 -> 0.066°, two-targets 0.033 -> 0.022°,
 approach 0.023 -> 0.025°; elevation approach 0.106 -> 0.065°, occlusion 0.052 -> 0.048°; against the
@@ -103,6 +103,17 @@ endless 0.142 -> 0.130°; against the volume centre about 1 % more, the volume c
 centroid refitted beside it (tracker.solid_prior.SolidPrior.upright_shift_front). The 1-σ along y is left
 as it was (a person's y is dominated by its limbs' shape, SolidPrior.upright_sigma, 2.8 % of its height).
 
+A side's 1-σ along x once its band is undone, the cameras still (2026-12-06): 1.4 px was set while the
+band was a share of the size (1.06 %, 1.3 px on a walker of 120 px); a fixed band of 0.78 px leaves less
+spread, and only bodies neither upright nor wide take it along x (a person's x is its SolidPrior term, a
+vehicle's sides are not undone). On approach:body's ball, seeds 0, 1 and 2, the azimuth's 1-σ with 1.4 px
+was 0.4-0.6 px where a side was faint against errors of 0.1-0.15 px (within 1σ 0.750, 0.903, 0.907; NEES
+0.927, 0.306, 0.462). Replayed from the frames' 1-σ terms, 0.70 px put five of the six lines in their bands
+(0.663 / 1.227, 0.813 / 0.704, 0.667 / 1.059; Gaussian maximum likelihood, seeds weighted alike, 0.52 px,
+which left seed 2's within 1σ at 0.467). `tmeye eval --all`: seed 0 117 met either way (approach 0.750 /
+0.927 -> 0.673 / 1.191), seed 1 101 either way (approach 0.903 / 0.306 -> 0.813 / 0.662), seed 2 100 -> 102
+(approach 0.907 / 0.462 -> 0.680 / 1.010).
+
 With the cameras moving there is no temporal model; a rim pixel's residual against its background then
 comes from the stereo pair (`stereo_residual`: eq. (9)'s left key where its test can be made, else the
 right key's), the same faint_level and side_px. On manoeuvre:body (a sphere tracked while the mount turns)
@@ -163,7 +174,7 @@ class RimContrastConfig:
     band_still_y: float = 0.0124
     band_still_px: float = 0.78
     person_band_still_y: float = 0.04
-    corrected_side_px: tuple[float, float] = (1.4, 0.9)
+    corrected_side_px: tuple[float, float] = (0.7, 0.9)
     corrected_side_moving_y_px: float = 0.5
 
 
