@@ -108,12 +108,16 @@ def test_a_still_bodys_faint_side_loses_a_band_of_fixed_width_along_x_a_share_of
     # the cameras moving (the stereo residual's shares): a share of the size, along y alone
     assert rim_shift_px(shares, large, CFG) == (0.0, 0.0)
     assert rim_shift_px((0.0, 0.0, 0.0, 1.0), large, CFG)[1] == pytest.approx(0.5 * CFG.band[1] * 120)
-    # and the spread left after it along y is the moving one's, x's the full side's
+    # and the spread left after it along y is the moving one's; along x a body not wide has the same spread
+    # moving or still, a vehicle (not corrected) the full side's
     bottom = (0.0, 0.0, 0.0, 1.0)
     moving_y = rim_sigma_px(bottom, CFG, (True, True), moving=True)[1]
     assert moving_y == pytest.approx(CFG.corrected_side_moving_y_px / 2)
     assert rim_sigma_px(bottom, CFG, (True, True))[1] == pytest.approx(CFG.corrected_side_px[1] / 2)
-    assert rim_sigma_px(shares, CFG, (True, True), moving=True)[0] == pytest.approx(CFG.side_px / 2)
+    assert rim_sigma_px(shares, CFG, (True, True), moving=True)[0] == pytest.approx(CFG.corrected_side_px[0] / 2)
+    assert rim_sigma_px(shares, CFG, (True, True))[0] == pytest.approx(CFG.corrected_side_px[0] / 2)
+    assert rim_sigma_px(shares, CFG, (False, False), moving=True)[0] == pytest.approx(CFG.side_px / 2)
+    assert CFG.corrected_side_px[0] < CFG.side_px
 
 
 def test_the_localiser_takes_the_rims_sigma_in_place_of_the_fixed_one() -> None:

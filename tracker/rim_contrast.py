@@ -103,7 +103,7 @@ endless 0.142 -> 0.130°; against the volume centre about 1 % more, the volume c
 centroid refitted beside it (tracker.solid_prior.SolidPrior.upright_shift_front). The 1-σ along y is left
 as it was (a person's y is dominated by its limbs' shape, SolidPrior.upright_sigma, 2.8 % of its height).
 
-A side's 1-σ along x once its band is undone, the cameras still (2026-12-06): 1.4 px was set while the
+A side's 1-σ along x for a body not wide (2026-12-06): 1.4 px was set while the
 band was a share of the size (1.06 %, 1.3 px on a walker of 120 px); a fixed band of 0.78 px leaves less
 spread, and only bodies neither upright nor wide take it along x (a person's x is its SolidPrior term, a
 vehicle's sides are not undone). On approach:body's ball, seeds 0, 1 and 2, the azimuth's 1-σ with 1.4 px
@@ -112,7 +112,13 @@ was 0.4-0.6 px where a side was faint against errors of 0.1-0.15 px (within 1σ 
 (0.663 / 1.227, 0.813 / 0.704, 0.667 / 1.059; Gaussian maximum likelihood, seeds weighted alike, 0.52 px,
 which left seed 2's within 1σ at 0.467). `tmeye eval --all`: seed 0 117 met either way (approach 0.750 /
 0.927 -> 0.673 / 1.191), seed 1 101 either way (approach 0.903 / 0.306 -> 0.813 / 0.662), seed 2 100 -> 102
-(approach 0.907 / 0.462 -> 0.680 / 1.010).
+(approach 0.907 / 0.462 -> 0.680 / 1.010). While the cameras move nothing is undone along x (band's x share
+0), and a ball's side there had side_px, 1.7 px: on manoeuvre:body (the sphere tracked while the mount
+turns) the azimuth within 1σ / NEES were 0.718 / 1.056, 0.908 / 0.369 and 0.888 / 0.425 (seeds 0, 1, 2);
+the same maximum likelihood over its frames gave 0.71 px, so a body not wide takes corrected_side_px along
+x moving or still. `tmeye eval --all` (both changes): seed 0 117 met either way (manoeuvre 0.639 / 1.474),
+seed 1 101 -> 104 (manoeuvre's azimuth 0.735 / 0.953 and elevation within 1σ 0.588 -> 0.643, the servo's
+path changing with its measurements' 1-σ), seed 2 100 -> 104 (manoeuvre 0.735 / 0.955).
 
 With the cameras moving there is no temporal model; a rim pixel's residual against its background then
 comes from the stereo pair (`stereo_residual`: eq. (9)'s left key where its test can be made, else the
@@ -165,8 +171,9 @@ class RimContrastConfig:
     a person) loses along x, a fixed width whatever its size; person_band_still_y: with them still, the
     band a person's wholly faint bottom loses (its lower legs over the ground), a share of its size;
     corrected_side_px: a side's 1-σ (px, x and y) left where that loss is undone (see the module's
-    docstring), corrected_side_moving_y_px along y while the cameras move (along x nothing is undone then:
-    band's x share is 0, so the side keeps side_px)."""
+    docstring), along x for a body not wide whether the cameras move or not (moving, nothing is undone along
+    x, band's x share being 0, yet the spread is the same), corrected_side_moving_y_px along y while the
+    cameras move."""
 
     faint_level: float = 24.0
     side_px: float = 1.7
@@ -255,10 +262,10 @@ def rim_sigma_px(shares: tuple[float, float, float, float], cfg: RimContrastConf
                  corrected: tuple[bool, bool] = (False, False), moving: bool = False) -> tuple[float, float]:
     """The centroid's 1-σ (px, x and y) from its outline's four sides, each side's 1-σ times its faint share
     f: √(σ_left² + σ_right²) / 2 along x, the same with top and bottom along y. The side's 1-σ is side_px,
-    or corrected_side_px along an axis whose expected loss `rim_shift_px` undoes (corrected: x, y; while the
-    cameras move, along y only, at corrected_side_moving_y_px: cfg.band's x share is 0)."""
-    undone_x = corrected[0] and not (moving and cfg.band[0] == 0.0)
-    sx = cfg.corrected_side_px[0] if undone_x else cfg.side_px
+    or corrected_side_px along an axis whose expected loss `rim_shift_px` undoes (corrected: x, y); while the
+    cameras move, corrected_side_px along x as well (nothing is undone there, cfg.band's x share being 0,
+    but a ball's spread is the same) and corrected_side_moving_y_px along y."""
+    sx = cfg.corrected_side_px[0] if corrected[0] else cfg.side_px
     sy = (cfg.corrected_side_moving_y_px if moving else cfg.corrected_side_px[1]) if corrected[1] else cfg.side_px
     v = [(sx * shares[0]) ** 2, (sx * shares[1]) ** 2, (sy * shares[2]) ** 2, (sy * shares[3]) ** 2]
     return float(np.sqrt(v[0] + v[1]) / 2.0), float(np.sqrt(v[2] + v[3]) / 2.0)
