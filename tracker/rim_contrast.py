@@ -122,7 +122,8 @@ path changing with its measurements' 1-σ), seed 2 100 -> 104 (manoeuvre 0.735 /
 
 With the cameras moving there is no temporal model; a rim pixel's residual against its background then
 comes from the stereo pair (`stereo_residual`: eq. (9)'s left key where its test can be made, else the
-right key's), the same faint_level and side_px. On manoeuvre:body (a sphere tracked while the mount turns)
+right key's), the same faint_level and side_px (along x, for a body not wide, corrected_side_px since
+2026-12-06, above). On manoeuvre:body (a sphere tracked while the mount turns)
 its sides' faint shares were 0.07 (left), 0.15 (right), 0.01 (top), 0.49 (bottom, shaded), the two keys
 alike at the bottom (0.50 on the pixels the left key tested, 0.48 on the right key's): azimuth within 1σ
 0.94 -> 0.67, NEES 0.30 -> 1.17 against the fixed term's 0.35 px; elevation 0.66 -> 0.86 and 0.95 ->

@@ -25,7 +25,7 @@ from sqlalchemy.exc import OperationalError
 from sqlalchemy.orm import Session, sessionmaker
 
 from server.services import segments
-from server.services.faults import FailureLog
+from server.services.faults import FailureLog, brief
 from tmeye.media.encoder import CLOCK_HZ, EncodedFrame
 from tmeye.media.fmp4 import SegmentMuxer
 from tmeye.media.pipeline import CAMERAS, MediaPipeline
@@ -236,7 +236,7 @@ class Recorder:
         """A write failed: stop recording (every open segment closed) until `_check_disk` retries."""
         first = self.fault is None
         self._retrying = False
-        self.fault = f"{what}: {type(exc).__name__}: {exc}".splitlines()[0][:300] + ": recording stopped"
+        self.fault = f"{what}: {brief(exc)}"[:300] + ": recording stopped"
         if first:
             self._retry_s = min(RETRY_MAX_S, max(DISK_CHECK_S, 2 * self._retry_s))
             self._retry_at = time.monotonic() + self._retry_s
