@@ -7,12 +7,10 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, JsonValue
 
+from server.schema_base import Strict
+
 Priority = Literal["critical", "high", "medium", "low"]
 AlarmState = Literal["unack", "ack", "rtn_unack", "shelved", "suppressed", "out_of_service", "normal"]
-
-
-class Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid")
 
 
 class ZoneCondition(Strict):

@@ -14,6 +14,7 @@ from sqlalchemy.orm import Session
 
 from server.context import AppContext
 from server.db.models import User
+from server.schema_base import SQLITE_MAX_INT
 from server.security import csrf_token, read_token
 from server.services import users as user_service
 
@@ -21,7 +22,6 @@ COOKIE = "tmeye_session"
 CSRF_COOKIE = "tmeye_csrf"
 CSRF_HEADER = "X-CSRF-Token"
 SAFE_METHODS = frozenset({"GET", "HEAD", "OPTIONS"})
-SQLITE_MAX_INT = 2**63 - 1
 
 # A row id in a path: SQLite's INTEGER range (a larger number would fail in the driver, not be "not found").
 RowId = Annotated[int, Path(ge=1, le=SQLITE_MAX_INT, description="row id")]

@@ -6,11 +6,9 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from server.schema_base import DbId, Strict, UnixTime
+
 Camera = Literal["left", "right"]
-
-
-class Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid")
 
 
 class SegmentOut(BaseModel):
@@ -57,10 +55,10 @@ class LockIn(Strict):
         {"start": 1795376480.0, "end": 1795376540.0, "note": "intrusion at the gate"}, {"track_id": 42},
         {"alarm_id": 7}]})
 
-    start: float | None = None
-    end: float | None = None
-    track_id: int | None = None
-    alarm_id: int | None = None
+    start: UnixTime | None = None
+    end: UnixTime | None = None
+    track_id: DbId | None = None
+    alarm_id: DbId | None = None
     note: str = Field("", max_length=2000)
 
     @model_validator(mode="after")
@@ -94,7 +92,7 @@ class LockOut(BaseModel):
 class BookmarkIn(Strict):
     model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [{"t": 1795376486.8, "note": "van"}]})
 
-    t: float
+    t: UnixTime
     note: str = Field(min_length=1, max_length=2000)
 
 
@@ -114,8 +112,8 @@ class ExportIn(Strict):
     model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
         {"start": 1795376480.0, "end": 1795376540.0, "cameras": ["left", "right"]}]})
 
-    start: float
-    end: float
+    start: UnixTime
+    end: UnixTime
     cameras: list[Camera] = Field(default=["left", "right"], min_length=1, max_length=2)
 
 
@@ -141,11 +139,11 @@ class ReplayIn(Strict):
     model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
         {"start": 1795376480.0, "end": 1795376540.0, "threshold": 16, "calibration_id": None}]})
 
-    start: float = Field(allow_inf_nan=False, description="Unix s")
-    end: float = Field(allow_inf_nan=False, description="Unix s")
+    start: UnixTime
+    end: UnixTime
     threshold: int | None = Field(None, ge=1, le=254, description="eq. (9) threshold ε in grey levels "
                                   "(default: the live one)")
-    calibration_id: int | None = Field(None, ge=1, description="replay with this calibration's rig "
+    calibration_id: DbId | None = Field(None, description="replay with this calibration's rig "
                                        "(default: the live rig)")
 
 

@@ -8,12 +8,9 @@ from typing import Any, Literal
 from pydantic import BaseModel, ConfigDict, Field
 
 from server.recording_schemas import RecordingStatus
+from server.schema_base import Strict
 
 Role = Literal["viewer", "operator", "admin"]
-
-
-class Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid")
 
 
 class Message(BaseModel):

@@ -32,7 +32,7 @@ class Settings(BaseSettings):
     source: str = Field("sim", description="frame source: sim, files, usb or rtsp")
     inputs: list[str] = Field(default_factory=list, description="LEFT RIGHT inputs of a real source")
     scenario: str = Field("endless", description="simulated scene (sim source); finite ones repeat")
-    seed: int = Field(0, description="seed of the simulated scene")
+    seed: int = Field(0, ge=0, description="seed of the simulated scene")
     rig: str | None = Field(None, description="rig file; default: the active calibration record, "
                                               "else the simulator's own rig")
     servo: str | None = Field(None, description="servo: sim (simulated gimbal), none, or a driver URL "

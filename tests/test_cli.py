@@ -142,6 +142,9 @@ def test_track_prints_one_json_line_per_frame() -> None:
         (("track", "--scenario", "nope"), "unknown scenario"),
         (("eval", "--scenario", "walk", "--epsilon", "0"), "epsilon"),
         (("track", "--origin", "1,2"), "--origin must be three numbers"),
+        (("eval", "--scenario", "walk", "--seed", "-1"), "--seed must be 0 or more, got -1"),
+        (("track", "--seed", "-2"), "--seed must be 0 or more, got -2"),
+        (("serve", "--seed", "-3"), "bad setting: seed: Input should be greater than or equal to 0"),
     ],
 )
 def test_bad_input_gives_one_line_and_exit_2(args: tuple[str, ...], message: str) -> None:

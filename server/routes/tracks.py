@@ -7,10 +7,13 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Query
 
 from server.deps import Address, CtxDep, DbDep, Operator, RowId, Viewer
+from server.schema_base import SQLITE_MAX_INT
 from server.schemas import Message, TrackDetail, TrackOut
 from server.services import control
 from server.services import tracks as track_service
 
+ReplayId = Annotated[int | None, Query(ge=1, le=SQLITE_MAX_INT,
+                                       description="a replay's tracks (default: the live ones)")]
 router = APIRouter(prefix="/api/tracks", tags=["tracks"])
 
 
@@ -18,8 +21,7 @@ router = APIRouter(prefix="/api/tracks", tags=["tracks"])
 def list_tracks(_p: Viewer, db: DbDep, start: Annotated[float | None, Query(description="Unix s")] = None,
                 end: Annotated[float | None, Query(description="Unix s")] = None,
                 limit: Annotated[int, Query(ge=1, le=10000)] = 500,
-                replay: Annotated[int | None, Query(ge=1, description="a replay's tracks (default: the live ones)")]
-                = None) -> list[Any]:
+                replay: ReplayId = None) -> list[Any]:
     return track_service.list_tracks(db, start, end, limit, replay)
 
 

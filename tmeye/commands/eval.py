@@ -112,6 +112,8 @@ def _alarms(args: argparse.Namespace) -> int:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.seed < 0:  # numpy's generators refuse it, naming no option
+        raise UserError(f"--seed must be 0 or more, got {args.seed}")
     names = _scenarios()
     if not 1 <= args.edge_samples <= 8:
         raise UserError(f"--edge-samples must be 1 to 8, got {args.edge_samples}")

@@ -91,6 +91,8 @@ def run(args: argparse.Namespace) -> int:
         return run_recording(args)
     if args.frames is not None and args.frames < 1:
         raise UserError(f"--frames must be at least 1, got {args.frames}")
+    if args.seed < 0:  # numpy's generators refuse it, naming no option
+        raise UserError(f"--seed must be 0 or more, got {args.seed}")
     if args.source == "sim" and args.inputs:
         raise UserError("--source sim takes no LEFT RIGHT inputs")
     if args.source != "sim" and not args.rig:

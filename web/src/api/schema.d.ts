@@ -1463,7 +1463,10 @@ export interface components {
          *     }
          */
         BookmarkIn: {
-            /** T */
+            /**
+             * T
+             * @description Unix s
+             */
             t: number;
             /** Note */
             note: string;
@@ -1679,9 +1682,15 @@ export interface components {
          *     }
          */
         ExportIn: {
-            /** Start */
+            /**
+             * Start
+             * @description Unix s
+             */
             start: number;
-            /** End */
+            /**
+             * End
+             * @description Unix s
+             */
             end: number;
             /**
              * Cameras
