@@ -7,6 +7,7 @@ cv2.findChessboardCornersSB (with or without CALIB_CB_ACCURACY); see tests/test_
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 
@@ -27,6 +28,10 @@ SUBPIX_CRITERIA = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 40, 1e-3)
 REGULARITY_TOL = 0.12
 # Smallest mean grey-level difference between dark and light squares that decides a board's orientation.
 MIN_CELL_CONTRAST = 20.0
+# The board sizes a calibration accepts: inner corners a side, and the square's side (in the unit of T,
+# metres in tmeye; below 0.1 mm the model points are too close for OpenCV's homography to start from).
+MAX_CORNERS = 100
+MIN_SQUARE = 1e-4
 
 
 @dataclass(frozen=True)
@@ -61,8 +66,12 @@ class BoardSpec:
         cols, rows = int(m.group(1)), int(m.group(2))
         if cols < 3 or rows < 3:
             raise CalibrationError(f"board {cols}x{rows} is too small: need at least 3x3 inner corners")
+        if cols > MAX_CORNERS or rows > MAX_CORNERS:  # 10^20 columns failed in the database, not here
+            raise CalibrationError(f"board {cols}x{rows} is too large: at most {MAX_CORNERS} inner corners a side")
         if not square > 0:
             raise CalibrationError(f"square size must be positive, got {square}")
+        if not MIN_SQUARE <= square < math.inf:  # 1e-300 m: OpenCV's homography assertion, not a reason
+            raise CalibrationError(f"square size must be at least {MIN_SQUARE:g} and finite, got {square:g}")
         return BoardSpec(cols, rows, float(square))
 
 

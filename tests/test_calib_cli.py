@@ -139,6 +139,12 @@ def test_malformed_board_argument() -> None:
         BoardSpec.parse("9by6", 0.05)
     with pytest.raises(CalibrationError, match="positive"):
         BoardSpec.parse("9x6", 0.0)
+    with pytest.raises(CalibrationError, match="too large: at most 100 inner corners"):
+        BoardSpec.parse("99999999999999999999x6", 0.05)
+    with pytest.raises(CalibrationError, match="at least 0.0001 and finite"):
+        BoardSpec.parse("9x6", 1e-300)
+    with pytest.raises(CalibrationError, match="at least 0.0001 and finite"):
+        BoardSpec.parse("9x6", float("inf"))
 
 
 def test_missing_glob_is_one_line_error(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
