@@ -1,11 +1,12 @@
 """What the API's request bodies share: no field they do not name, no NaN or infinity in a number, and
 the ranges a stored row id and a Unix time can take.
 
-JSON has neither NaN nor infinity, but the parser the server reads bodies with accepts both, and each
-got past validation: a bookmark at NaN seconds failed in the database (a 500); a lock ending at infinity
-and a bookmark at infinity were stored with no time (NULL); a zone's bound of NaN made a rule that never
-fires. A row id past SQLite's INTEGER range (a lock's track_id of 10²³) failed in the driver, not as
-"not found". A time before 1970 or after 9999 is no time the recorder can hold."""
+JSON has neither NaN nor infinity, but the parser the server reads bodies with accepts both, and where
+a field had no bounds they got past validation: a bookmark at NaN seconds failed in the database (a 500);
+a lock ending at infinity and a bookmark at infinity were accepted and read back with no time (null). A
+row id past SQLite's INTEGER range (a lock's track_id of 10²³) failed in the driver, not as "not found".
+A time before 1970 or after 9999 is no time the recorder can hold. (An alarm condition's numbers were
+already checked finite by server.alarms.conditions; that check stays, for rules stored before.)"""
 
 from __future__ import annotations
 
