@@ -409,8 +409,7 @@ def test_a_round_body_is_placed_at_the_centre_of_a_sphere_behind_its_seen_face()
     prior = SolidPrior()
     ratio, sigma = prior.depth_ratio(60.0, 60.0)  # seen as wide as high: neither upright nor wide
     assert math.isclose(0.5 * ratio * 2.0 * R, face_before_centre, rel_tol=1e-3)
-    # a cylinder seen side-on (πR/4 before its axis) lies within the 1-σ
-    assert abs(np.pi / 4.0 - ratio) <= sigma
+    assert 0.0 < sigma < 0.1  # fitted to a sphere's ranges (tracker.round_face), not spanning other shapes
 
 
 def test_an_upright_bodys_centre_lies_higher_above_its_silhouette_seen_from_the_side() -> None:

@@ -120,7 +120,8 @@ class Localizer:
                extent_px: tuple[float, float] | None = None, rim_px: tuple[float, float] | None = None,
                in_frame: bool = True, top_px: float | None = None, swing: float | None = None,
                upright: bool | None = None, stature: tuple[float, float] | None = None,
-               gait: float | None = None, warped: bool = False, top_fused: bool = False) -> Localization:
+               gait: float | None = None, warped: bool = False, top_fused: bool = False,
+               matched: float = 1.0) -> Localization:
         """extra_px: the centroid's further 1-σ (px) along x and y, where the target is seen only in part
         (tracker.visibility). extent_px: the target's seen width and height (px), for the SolidPrior.
         rim_px: the outline's 1-σ (px, x and y) from its rim's contrast (tracker.rim_contrast), in place of
@@ -137,7 +138,9 @@ class Localizer:
         walks (tracker.heading; None: unknown, taken as walking). warped: the cameras move, so the outline is
         drawn by warping (an upright body's y 1-σ is then SolidPrior.upright_warped_sigma's). top_fused: the
         outline's bottom was inferred, not seen (tracker.results.Blob.bottom_inferred): an upright body's
-        centre from its top (top_px) and the one from its centroid and shift are fused (`fused`)."""
+        centre from its top (top_px) and the one from its centroid and shift are fused (`fused`). matched: for
+        a round body, how much higher the pixels its disparity was matched on stand than its whole face
+        (tracker.round_face.matched_factor; SolidPrior.behind_face_px)."""
         x, y = float(centroid_rect[0]), float(centroid_rect[1])
         X_meas = self.rect.rect_to_rig(x, y, disparity)  # eq. (2)
         from_top = None
@@ -146,7 +149,7 @@ class Localizer:
             upright = self.solid is not None and extent_px is not None and self.solid.upright(*extent_px)
         behind = None  # a solid body's centre's depth behind its face and its 1-σ (px at the face's depth)
         if self.solid is not None and extent_px is not None:
-            behind = self.solid.behind_face_px(*extent_px, upright=upright)
+            behind = self.solid.behind_face_px(*extent_px, upright=upright, matched=matched)
             if upright:
                 behind = self.solid.seen_in_part(behind, extent_px[1], disparity, self.rect.b)
                 if in_frame:  # a person's volume centre above its silhouette's

@@ -39,10 +39,12 @@ from tracker.rim_contrast import (
     rim_sigma_px,
     stereo_residual,
 )
+from tracker.round_face import matched_factor
 from tracker.schedule import SigmaSchedule, SigmaTerms, VerifySchedule
 from tracker.segmentation import ExtentHistory, HeightHistory, outer_runs, outline_sigma_px
 from tracker.solid_prior import SolidPrior
 from tracker.split import join_occluded, join_parts
+from tracker.strips import whole_outline
 from tracker.temporal import TemporalConfig, TemporalDetector, without_duplicates
 from tracker.tracks import MultiTracker, TrackerConfig
 from tracker.verify import Verifier
@@ -229,9 +231,19 @@ class Pipeline:
                                     b.area, frame.gimbal, (cx, float(np.hypot(cy, jump))), (float(w), float(h)),
                                     terms.rim_px, in_frame, top, swing, True if terms.known_person else None,
                                     None if top is None else self.extents.stature_m(track_id, self.rect.b, b.disparity),
-                                    gait, self.subtractor.left_background(frame.gimbal) is None, fuse)
+                                    gait, self.subtractor.left_background(frame.gimbal) is None, fuse,
+                                    self._matched(b, track_id))
         self.headings.add(track_id, frame.index, frame.t, loc.world)
         return loc
+
+    def _matched(self, b: Blob, track_id: int) -> float:
+        """How much higher the pixels a round body's disparity was matched on stand than its whole face
+        (tracker.round_face.matched_factor); 1 for an outline matched whole (a person's) and for a piece of
+        a track seen upright whole before (a person's part, not a ball)."""
+        solid = self.localizer.solid
+        if solid is None or whole_outline(b.mask) or self.extents.seen_upright(track_id, solid.upright_aspect):
+            return 1.0
+        return matched_factor(b.mask)
 
     def _perspective_px(self, b: Blob, extent_px: tuple[float, float], terms: SigmaTerms) -> F64:
         """How far (px, x and y) a solid body's centre's direction lies from eq. (10)'s centroid by perspective:
