@@ -243,7 +243,7 @@ class Pipeline:
         solid = self.localizer.solid
         if solid is None or whole_outline(b.mask) or self.extents.seen_upright(track_id, solid.upright_aspect):
             return 1.0
-        return matched_factor(b.mask)
+        return matched_factor(b.mask, self.rect.f)
 
     def _perspective_px(self, b: Blob, extent_px: tuple[float, float], terms: SigmaTerms) -> F64:
         """How far (px, x and y) a solid body's centre's direction lies from eq. (10)'s centroid by perspective:

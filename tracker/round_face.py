@@ -10,15 +10,16 @@ rim, which lies deepest. Both put the face measured nearer than the face's mean,
 too near: on approach:body (a ball 0.6 m across) by 3.5 % of the range at 2-4 m (its disparity 2.6 % over
 the seen face's), 1.4 % at 4-6 m and 0.3 % beyond 8 m.
 
-`matched_factor` is how much higher, on a surface round like a sphere's over the outline (an ellipse on its
-box, each pixel's height √(1 - q²) at normalised radius q), the pixels matched stand than the whole
-outline's: the mean height over the core within the window over the mean over the outline. The centre's
-depth behind the face measured is that factor times SolidPrior's (SolidPrior.behind_face_px, `matched`).
-Predicted for a disc 14, 35, 72 and 120 px across: the disparity 0.17, 0.21, 1.28 and 2.92 % over the face's;
-measured on approach:body at those widths 0.28, 0.16-0.21, 1.12 and 2.59 %. With it (and SolidPrior's ρ
-refitted about it) the ball's range bias was -0.84 % at 2-4 m and -0.03 to -0.16 % beyond 6 m
-(2026-12-06, docs/evaluation.md). A piece of a body seen upright whole before (a person's part beside
-what hides the rest) keeps the factor 1: it is no sphere (tracker.pipeline).
+`matched_factor` is the depth of a sphere's centre behind the face its disparity measures (the pixels
+matched, seen in perspective), over what SolidPrior's ρ puts there; the centre's depth behind the face and
+that depth's 1-σ are scaled by it (SolidPrior.behind_face_px, `matched`). Perspective counts at close range
+on its own: seen from 10 radii a sphere's face lies 0.72 R before its centre, not 2R/3, and the prior's
+extent is measured at the face's depth, 7 % nearer than the centre's. Orthographic (the window and the core
+alone), discs 14, 35, 72 and 120 px across predict a disparity 0.17, 0.21, 1.28 and 2.92 % over the whole
+face's; measured on approach:body at those widths 0.28, 0.16-0.21, 1.12 and 2.59 %. With the window and the
+core alone the ball's range bias was -0.84 % at 2-4 m; with perspective too, -0.08 to +0.27 % (seeds 0-2),
+and -0.02 % over the run (2026-12-06, docs/evaluation.md). A piece of a body seen upright whole before (a
+person's part beside what hides the rest) keeps the factor 1: it is no sphere (tracker.pipeline).
 """
 
 from __future__ import annotations
@@ -33,22 +34,35 @@ BoolA = NDArray[np.bool_]
 _CORE = np.ones((3, 3), np.uint8)  # Strips.core's erosion
 
 
-def matched_factor(mask: BoolA, half: tuple[int, int] = MATCH_HALF) -> float:
-    """The mean height of a sphere-like surface over the outline `mask` ((h, w) bool over its box, raw left
-    pixels) at the pixels its disparity is matched on (its core, eroded by a 3 x 3 pixel, within the central
-    window of half size `half`, px, about the outline's box centre) over that mean over the whole outline;
-    1 where nothing of the core lies in the window. At least 1 for an outline that is an ellipse."""
+def matched_factor(mask: BoolA, f_px: float, half: tuple[int, int] = MATCH_HALF) -> float:
+    """k: the depth of the sphere's centre behind the face its disparity measures, over SolidPrior's for a
+    round body (ρ/2 · e at the face's depth, ρ = 2/3: e/3 px, e = the outline's smaller extent). The outline
+    `mask` ((h, w) bool over its box, raw left pixels) is taken as the image of a sphere seen from distance
+    D: its angular radius a, tan a = √(A B) / f (A, B its box's half extents, px; f_px the focal length),
+    so R = D sin a. Each pixel at normalised radius q (an ellipse on the box) looks along a ray θ off the
+    centre's, tan θ = q tan a, which meets the sphere at depth z = (cos θ - √(sin²a - sin²θ)) cos θ D. The
+    disparity matched is the mean of 1/z over the pixels matched (the core, eroded by a 3 x 3 pixel, within
+    the central window of half size `half`, px, about the box centre): the face at Z_m = 1 / mean(1/z).
+    The centre lies D - Z_m behind it, where the prior puts (2/3) tan a · Z_m: k = (D - Z_m) / ((2/3) tan a
+    Z_m). At a small angle and with the whole outline matched k = 1 (the face's mean 2R/3 before the
+    centre); a near ball's middle, its core and perspective (a near sphere's face lies more than 2R/3
+    before its centre, and the prior's extent is taken at the face's depth, not the centre's) raise it.
+    1 where nothing of the core lies in the window."""
     m8 = mask.view(np.uint8)
     bx, by, bw, bh = cv2.boundingRect(m8)
-    if bw < 2 or bh < 2:
+    if bw < 2 or bh < 2 or f_px <= 0:
         return 1.0
     ys, xs = np.mgrid[0:mask.shape[0], 0:mask.shape[1]]
     cx, cy = bx + 0.5 * bw, by + 0.5 * bh  # pixel centres at +0.5
     qx, qy = (xs + 0.5 - cx) / (0.5 * bw), (ys + 0.5 - cy) / (0.5 * bh)
-    height = np.sqrt(np.clip(1.0 - qx * qx - qy * qy, 0.0, None))
     window = (np.abs(xs + 0.5 - cx) <= half[0]) & (np.abs(ys + 0.5 - cy) <= half[1])
     core = (cv2.erode(m8, _CORE) > 0) & window
-    whole = float(height[mask].mean())
-    if not core.any() or whole <= 0.0:
+    if not core.any():
         return 1.0
-    return float(height[core].mean()) / whole
+    tan_a = 0.5 * float(np.sqrt(bw * bh)) / f_px
+    sin_a = tan_a / float(np.sqrt(1.0 + tan_a * tan_a))
+    q = np.minimum(np.sqrt(qx[core] ** 2 + qy[core] ** 2), 1.0)
+    theta = np.arctan(q * tan_a)
+    z = (np.cos(theta) - np.sqrt(np.clip(sin_a**2 - np.sin(theta) ** 2, 0.0, None))) * np.cos(theta)  # D = 1
+    z_m = 1.0 / float(np.mean(1.0 / z))
+    return (1.0 - z_m) / (2.0 / 3.0 * tan_a * z_m)

@@ -16,22 +16,22 @@ class SolidPrior:
     left camera's line of sight through the centroid. D is unseen; it is taken as ρ times the target's
     smaller seen extent (width or height, m), ρ = `ratio` ± `ratio_sigma` (1-σ). The centre is then placed
     ρ/2 · extent behind the measured point and its range's variance grows by (ratio_sigma/2 · extent)².
-    The default, ρ = 2/3 ± 0.035, is a round body's (a ball; an upright body and a wide one have priors of
-    their own, below): the seen face's mean depth lies, for a sphere of radius R, 2R/3 before its centre
-    (the mean of √(R² - r²) over the disc it is seen as), so ρ/2 · 2R = 2R/3. The pixels its disparity is
-    matched on stand higher than the face's mean (tracker.round_face: the outline's core within a central
-    window), and both terms are scaled by how much (`behind_face_px`, matched). ± 0.035 is the Student-t
-    (ν = 4) fit (0.034), each run weighted alike, of the range errors of approach:body and manoeuvre:body (a ball
-    0.6 m across, at 2 to 30 m and at 8 to 12 m) with seeds 0, 1 and 2, once the matched part was allowed
-    for (2026-12-06; the Gaussian fit 0.044): the spread of that allowance about a true sphere, not of round
-    shapes. A body round but not a sphere lies outside it: a cylinder seen side-on has ρ = π/4 (its face's
-    mean πR/4 before its axis), 3.4 of these σ off. It had been ± 0.15, spanning such shapes; the ball's
-    ranges were then 3.5 % too near at 2-4 m (its central window matched its middle) and 0.3 % beyond 8 m
-    (its core left out the rim), within the 1-σ by that margin: approach:body range NEES 1.29, 6.2 at 2-4
-    m, manoeuvre:body within 1σ 0.81, NEES 0.60. With 0.5 ± 0.3 (a person's depth over its width, before
-    upright bodies had their own) the ball of approach:body and manoeuvre:body was placed R/6 too near:
-    range bias -1.0 % and -0.8 %, RMSE 0.186 and 0.088 m; with 2/3, -0.6 % and -0.3 %, 0.167 and 0.045 m.
-    Flat targets (a board facing the cameras) have ρ = 0: no prior (None).
+    The default, ρ = 2/3 ± 0.01, is a round body's (a ball; an upright body and a wide one have priors of
+    their own, below): the seen face's mean depth lies, for a sphere of radius R seen from afar, 2R/3
+    before its centre (the mean of √(R² - r²) over the disc it is seen as), so ρ/2 · 2R = 2R/3. Both terms
+    are scaled by tracker.round_face.matched_factor (`behind_face_px`, matched): the pixels matched (the
+    outline's core within a central window) stand out further than the face's mean, and a near sphere is
+    seen in perspective. ± 0.01 is the spread left about a true sphere once those are allowed for, fitted to
+    the range errors of approach:body and manoeuvre:body (a ball 0.6 m across, at 2 to 30 m and at 8 to 12
+    m) with seeds 0, 1 and 2, each run weighted alike (2026-12-06): Student-t (ν = 4) 0.0065, Gaussian
+    0.011. It is a sphere's, not round shapes': a body round but not a sphere lies outside it (a cylinder
+    seen side-on has ρ = π/4, its face's mean πR/4 before its axis). It had been ± 0.15, spanning such
+    shapes, while the ball's ranges were 3.5 % too near at 2-4 m (its central window matched its middle)
+    and 0.3 % beyond 8 m (its core left out the rim), within the 1-σ by that margin: approach:body range
+    NEES 1.29, 6.2 at 2-4 m, manoeuvre:body within 1σ 0.81, NEES 0.60. With 0.5 ± 0.3 (a person's depth
+    over its width, before upright bodies had their own) the ball of approach:body and manoeuvre:body was
+    placed R/6 too near: range bias -1.0 % and -0.8 %, RMSE 0.186 and 0.088 m; with 2/3, -0.6 % and -0.3 %,
+    0.167 and 0.045 m. Flat targets (a board facing the cameras) have ρ = 0: no prior (None).
 
     A wide body (seen width at least `wide_aspect` times its height: a vehicle side-on) is deeper than its
     smaller extent, its height, says under the general ρ: a car is about 1.8 m deep and 1.4-1.5 m high
@@ -209,7 +209,7 @@ class SolidPrior:
     13 px rms off so, the centroid 10 px, with the image's top row and a face's depth to go on."""
 
     ratio: float = 2.0 / 3.0
-    ratio_sigma: float = 0.035
+    ratio_sigma: float = 0.01
     height_m: float = 1.70
     height_sigma_m: float = 0.10
     centre_below_top: float = 0.45
