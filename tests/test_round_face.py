@@ -78,7 +78,7 @@ def test_a_near_sphere_is_placed_by_its_face_seen_in_perspective() -> None:
     yy, xx = np.mgrid[0:h, 0:w]
     core &= (np.abs(xx + 0.5 - w / 2) <= MATCH_HALF[0]) & (np.abs(yy + 0.5 - h / 2) <= MATCH_HALF[1])
     z_m = 1.0 / float(np.mean(1.0 / z[core]))
-    tan_a = 0.5 * float(np.sqrt(w * h)) / f
+    tan_a = 0.5 * float(min(w, h)) / f
     k = matched_factor(mask, f)
     assert math.isclose(k * 2.0 / 3.0 * tan_a * z_m, D - z_m, rel_tol=0.01)
     assert k > matched_factor(mask, FAR) * 1.05  # perspective adds to the window's and the core's

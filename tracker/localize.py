@@ -139,7 +139,7 @@ class Localizer:
         drawn by warping (an upright body's y 1-σ is then SolidPrior.upright_warped_sigma's). top_fused: the
         outline's bottom was inferred, not seen (tracker.results.Blob.bottom_inferred): an upright body's
         centre from its top (top_px) and the one from its centroid and shift are fused (`fused`). matched: for
-        a round body, how much higher the pixels its disparity was matched on stand than its whole face
+        a round body, its centre's depth behind the face its matched pixels measure over the prior's
         (tracker.round_face.matched_factor; SolidPrior.behind_face_px)."""
         x, y = float(centroid_rect[0]), float(centroid_rect[1])
         X_meas = self.rect.rect_to_rig(x, y, disparity)  # eq. (2)

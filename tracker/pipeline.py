@@ -237,7 +237,7 @@ class Pipeline:
         return loc
 
     def _matched(self, b: Blob, track_id: int) -> float:
-        """How much higher the pixels a round body's disparity was matched on stand than its whole face
+        """A round body's centre's depth behind the face its matched pixels measure over its SolidPrior's
         (tracker.round_face.matched_factor); 1 for an outline matched whole (a person's) and for a piece of
         a track seen upright whole before (a person's part, not a ball)."""
         solid = self.localizer.solid

@@ -37,9 +37,9 @@ _CORE = np.ones((3, 3), np.uint8)  # Strips.core's erosion
 def matched_factor(mask: BoolA, f_px: float, half: tuple[int, int] = MATCH_HALF) -> float:
     """k: the depth of the sphere's centre behind the face its disparity measures, over SolidPrior's for a
     round body (ρ/2 · e at the face's depth, ρ = 2/3: e/3 px, e = the outline's smaller extent). The outline
-    `mask` ((h, w) bool over its box, raw left pixels) is taken as the image of a sphere seen from distance
-    D: its angular radius a, tan a = √(A B) / f (A, B its box's half extents, px; f_px the focal length),
-    so R = D sin a. Each pixel at normalised radius q (an ellipse on the box) looks along a ray θ off the
+    `mask` ((h, w) bool over its box, raw left pixels) is taken as the image of the sphere the prior
+    supposes, seen from distance D: its angular radius a, tan a = e / 2f (f_px the focal length), so R = D
+    sin a. Each pixel at normalised radius q (an ellipse on the box) looks along a ray θ off the
     centre's, tan θ = q tan a, which meets the sphere at depth z = (cos θ - √(sin²a - sin²θ)) cos θ D. The
     disparity matched is the mean of 1/z over the pixels matched (the core, eroded by a 3 x 3 pixel, within
     the central window of half size `half`, px, about the box centre): the face at Z_m = 1 / mean(1/z).
@@ -59,7 +59,7 @@ def matched_factor(mask: BoolA, f_px: float, half: tuple[int, int] = MATCH_HALF)
     core = (cv2.erode(m8, _CORE) > 0) & window
     if not core.any():
         return 1.0
-    tan_a = 0.5 * float(np.sqrt(bw * bh)) / f_px
+    tan_a = 0.5 * float(min(bw, bh)) / f_px  # the prior's extent e
     sin_a = tan_a / float(np.sqrt(1.0 + tan_a * tan_a))
     q = np.minimum(np.sqrt(qx[core] ** 2 + qy[core] ** 2), 1.0)
     theta = np.arctan(q * tan_a)

@@ -336,8 +336,8 @@ class SolidPrior:
         σ_ρ/2 · e (depth_ratio; e its seen width if upright, else its smaller extent); for an upright body
         at least κ (g h - w) ± upright_side_sigma times that (seen side-on; upright_girth g,
         upright_side_ratio κ). upright: known to be a person or not; None: by the extent. matched: for a
-        round body (neither upright nor wide), how much higher the part of the face its disparity was
-        matched on stands than the whole face (tracker.round_face.matched_factor): both terms times it."""
+        round body (neither upright nor wide), its centre's depth behind the face its matched pixels measure
+        over this prior's (tracker.round_face.matched_factor): both terms times it."""
         up = self.upright(width_px, height_px) if upright is None else upright
         ratio, ratio_sigma = self.depth_ratio(width_px, height_px, up)
         e = width_px if up else min(width_px, height_px)
