@@ -28,10 +28,9 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from tracker.strips import MATCH_HALF
+from tracker.strips import CORE, MATCH_HALF
 
 BoolA = NDArray[np.bool_]
-_CORE = np.ones((3, 3), np.uint8)  # Strips.core's erosion
 
 
 def matched_factor(mask: BoolA, f_px: float, half: tuple[int, int] = MATCH_HALF) -> float:
@@ -56,7 +55,7 @@ def matched_factor(mask: BoolA, f_px: float, half: tuple[int, int] = MATCH_HALF)
     cx, cy = bx + 0.5 * bw, by + 0.5 * bh  # pixel centres at +0.5
     qx, qy = (xs + 0.5 - cx) / (0.5 * bw), (ys + 0.5 - cy) / (0.5 * bh)
     window = (np.abs(xs + 0.5 - cx) <= half[0]) & (np.abs(ys + 0.5 - cy) <= half[1])
-    core = (cv2.erode(m8, _CORE) > 0) & window
+    core = (cv2.erode(m8, CORE) > 0) & window
     if not core.any():
         return 1.0
     tan_a = 0.5 * float(min(bw, bh)) / f_px  # the prior's extent e

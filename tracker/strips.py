@@ -16,7 +16,7 @@ from tracker.stereo import RegionMatch, match_region, refine_region, zncc_weight
 U8 = NDArray[np.uint8]
 BoolA = NDArray[np.bool_]
 Box = tuple[int, int, int, int]
-_CORE = np.ones((3, 3), np.uint8)
+CORE = np.ones((3, 3), np.uint8)  # the erosion that shrinks an outline to its core (Strips.core)
 # weighted ZNCC a region's match needs: a whole object scores 0.95-0.99; a sliver beside an occluder that
 # catches the occluder's edge scores lower and would give a wrong disparity
 MIN_SCORE = 0.8
@@ -89,7 +89,7 @@ class Strips:
         mmy = my[ry0:ry1, rx0:rx1] - np.float32(y0)
         wgt = cv2.remap(region.astype(np.float32), mmx, mmy, cv2.INTER_LINEAR,
                         borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
-        core = np.asarray(cv2.erode((wgt > 0.99).astype(np.uint8), _CORE), np.uint8)
+        core = np.asarray(cv2.erode((wgt > 0.99).astype(np.uint8), CORE), np.uint8)
         whole = (wgt > 0.5).astype(np.uint8)
         if int(np.count_nonzero(core)) < 8:
             core = whole
