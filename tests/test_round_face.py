@@ -84,6 +84,13 @@ def test_a_near_sphere_is_placed_by_its_face_seen_in_perspective() -> None:
     assert k > matched_factor(mask, FAR) * 1.05  # perspective adds to the window's and the core's
 
 
+def test_the_factor_is_over_the_priors_own_ratio() -> None:
+    mask = _disc(45.0)
+    k = matched_factor(mask, 600.0)
+    assert k > 1.0
+    assert math.isclose(matched_factor(mask, 600.0, ratio=1.0 / 3.0), 2.0 * k, rel_tol=1e-9)
+
+
 def test_an_outline_too_small_to_tell_changes_nothing() -> None:
     assert matched_factor(np.zeros((5, 5), bool), 600.0) == 1.0
     one = np.zeros((5, 5), bool)

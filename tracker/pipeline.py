@@ -232,18 +232,20 @@ class Pipeline:
                                     terms.rim_px, in_frame, top, swing, True if terms.known_person else None,
                                     None if top is None else self.extents.stature_m(track_id, self.rect.b, b.disparity),
                                     gait, self.subtractor.left_background(frame.gimbal) is None, fuse,
-                                    self._matched(b, track_id))
+                                    self._matched(b, track_id, (float(w), float(h))))
         self.headings.add(track_id, frame.index, frame.t, loc.world)
         return loc
 
-    def _matched(self, b: Blob, track_id: int) -> float:
+    def _matched(self, b: Blob, track_id: int, extent_px: tuple[float, float]) -> float:
         """A round body's centre's depth behind the face its matched pixels measure over its SolidPrior's
-        (tracker.round_face.matched_factor); 1 for an outline matched whole (a person's) and for a piece of
-        a track seen upright whole before (a person's part, not a ball)."""
+        (tracker.round_face.matched_factor); 1 for a wide body (SolidPrior.behind_face_px does not scale
+        it), for an outline matched whole (a person's) and for a piece of a track seen upright whole before
+        (a person's part, not a ball). extent_px: the outline's (w, h), px."""
         solid = self.localizer.solid
-        if solid is None or whole_outline(b.mask) or self.extents.seen_upright(track_id, solid.upright_aspect):
+        if (solid is None or solid.wide(*extent_px) or whole_outline(b.mask)
+                or self.extents.seen_upright(track_id, solid.upright_aspect)):
             return 1.0
-        return matched_factor(b.mask, self.rect.f)
+        return matched_factor(b.mask, self.rect.f, solid.ratio)
 
     def _perspective_px(self, b: Blob, extent_px: tuple[float, float], terms: SigmaTerms) -> F64:
         """How far (px, x and y) a solid body's centre's direction lies from eq. (10)'s centroid by perspective:

@@ -33,20 +33,21 @@ from tracker.strips import CORE, MATCH_HALF
 BoolA = NDArray[np.bool_]
 
 
-def matched_factor(mask: BoolA, f_px: float, half: tuple[int, int] = MATCH_HALF) -> float:
+def matched_factor(mask: BoolA, f_px: float, ratio: float = 2.0 / 3.0,
+                   half: tuple[int, int] = MATCH_HALF) -> float:
     """k: the depth of the sphere's centre behind the face its disparity measures, over SolidPrior's for a
-    round body (ρ/2 · e at the face's depth, ρ = 2/3: e/3 px, e = the outline's smaller extent). The outline
-    `mask` ((h, w) bool over its box, raw left pixels) is taken as the image of the sphere the prior
-    supposes, seen from distance D: its angular radius a, tan a = e / 2f (f_px the focal length), so R = D
-    sin a. Each pixel at normalised radius q (an ellipse on the box) looks along a ray θ off the
-    centre's, tan θ = q tan a, which meets the sphere at depth z = (cos θ - √(sin²a - sin²θ)) cos θ D. The
-    disparity matched is the mean of 1/z over the pixels matched (the core, eroded by a 3 x 3 pixel, within
-    the central window of half size `half`, px, about the box centre): the face at Z_m = 1 / mean(1/z).
-    The centre lies D - Z_m behind it, where the prior puts (2/3) tan a · Z_m: k = (D - Z_m) / ((2/3) tan a
-    Z_m). At a small angle and with the whole outline matched k = 1 (the face's mean 2R/3 before the
-    centre); a near ball's middle, its core and perspective (a near sphere's face lies more than 2R/3
-    before its centre, and the prior's extent is taken at the face's depth, not the centre's) raise it.
-    1 where nothing of the core lies in the window."""
+    round body (ρ/2 · e at the face's depth, e = the outline's smaller extent; ρ = `ratio`, SolidPrior.ratio,
+    2/3 for a sphere). The outline `mask` ((h, w) bool over its box, raw left pixels) is taken as the image
+    of the sphere the prior supposes, seen from distance D: its angular radius a, tan a = e / 2f (f_px the
+    focal length), so R = D sin a. Each pixel at normalised radius q (an ellipse on the box) looks along a
+    ray θ off the centre's, tan θ = q tan a, which meets the sphere at depth z = (cos θ - √(sin²a -
+    sin²θ)) cos θ D. The disparity matched is the mean of 1/z over the pixels matched (the core, eroded by
+    tracker.strips.CORE, within the central window of half size `half`, px, about the box centre): the
+    face at Z_m = 1 / mean(1/z). The centre lies D - Z_m behind it, where the prior puts ρ tan a · Z_m:
+    k = (D - Z_m) / (ρ tan a Z_m). At a small angle, with the whole outline matched and ρ = 2/3, k = 1
+    (the face's mean 2R/3 before the centre); a near ball's middle, its core and perspective (a near
+    sphere's face lies more than 2R/3 before its centre, and the prior's extent is taken at the face's
+    depth, not the centre's) raise it. 1 where nothing of the core lies in the window."""
     m8 = mask.view(np.uint8)
     bx, by, bw, bh = cv2.boundingRect(m8)
     if bw < 2 or bh < 2 or f_px <= 0:
@@ -64,4 +65,4 @@ def matched_factor(mask: BoolA, f_px: float, half: tuple[int, int] = MATCH_HALF)
     theta = np.arctan(q * tan_a)
     z = (np.cos(theta) - np.sqrt(np.clip(sin_a**2 - np.sin(theta) ** 2, 0.0, None))) * np.cos(theta)  # D = 1
     z_m = 1.0 / float(np.mean(1.0 / z))
-    return (1.0 - z_m) / (2.0 / 3.0 * tan_a * z_m)
+    return (1.0 - z_m) / (ratio * tan_a * z_m)
