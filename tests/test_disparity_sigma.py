@@ -11,7 +11,12 @@ from tracker.disparity_sigma import (
     FEW_PARTS_FACTOR,
     FEW_PARTS_PERSON_PX,
     MIN_PARTS,
+    PRIOR_DOF,
+    PRIOR_SHARE,
     ROWS,
+    SPREAD_RATE,
+    SPREAD_SHARE,
+    PartSpread,
     blob_sigma,
     on_surface,
     part_fits,
@@ -159,8 +164,12 @@ def test_a_persons_disparity_is_its_parts_mean_by_pixels_not_its_best_textured_p
     assert len(fits) == COLUMNS * ROWS and {f.pixels for f in fits} == {240}
     mean = surface_mean(fits)
     assert mean is not None and abs(mean[0] - 10.3) < 0.03
-    # its 1-σ: the standard error of an equally weighted mean (equal pixel counts), s / √n
-    assert np.isclose(mean[1], np.std([f.d for f in fits], ddof=1) / np.sqrt(len(fits)))
+    # its 1-σ: the standard error of an equally weighted mean (equal pixel counts), s / √n, s the parts'
+    # spread pooled with the prior's
+    n = len(fits)
+    spread = np.var([f.d for f in fits], ddof=1)
+    var = (PRIOR_DOF * (PRIOR_SHARE * mean[0]) ** 2 + (n - 1) * spread) / (PRIOR_DOF + n - 1)
+    assert np.isclose(mean[1], np.sqrt(var / n))
     assert surface_mean(fits[:MIN_PARTS - 1]) is None  # too few parts to tell: none
 
 
@@ -206,4 +215,64 @@ def test_the_surface_mean_weighs_each_part_by_its_pixels() -> None:
     mean = surface_mean([PartFit(di, 0.01, ni) for di, ni in zip(d, n, strict=True)])
     w = np.array(n) / sum(n)
     assert mean is not None and np.isclose(mean[0], float(w @ d)) and not np.isclose(mean[0], np.mean(d))
-    assert np.isclose(mean[1], np.std(d, ddof=1) * np.sqrt(np.sum(w * w)))
+    var = (PRIOR_DOF * (PRIOR_SHARE * mean[0]) ** 2 + 7 * np.var(d, ddof=1)) / (PRIOR_DOF + 7)
+    assert np.isclose(mean[1], np.sqrt(var * np.sum(w * w)))
+
+
+def test_a_persons_parts_that_happen_to_agree_keep_the_priors_spread() -> None:
+    """Eight parts that agree to a hundredth of a pixel at 20 px: their own spread would give the mean a
+    1-σ of 0.004 px; pooled with the prior's (PRIOR_SHARE · d̄ worth PRIOR_DOF parts) it keeps most of
+    that spread (√(8 / 15) of it), and parts that disagree widely most of theirs (√(7 / 15))."""
+    agree = [PartFit(20.0 + 0.01 * (i % 2), 0.01, 100) for i in range(8)]
+    mean = surface_mean(agree)
+    assert mean is not None
+    prior_only = PRIOR_SHARE * mean[0] / np.sqrt(8)
+    assert 0.7 * prior_only < mean[1] < prior_only
+    wide = [PartFit(20.0 + (1.0 if i % 2 else -1.0), 0.01, 100) for i in range(8)]
+    wide_mean = surface_mean(wide)
+    own = np.std([f.d for f in wide], ddof=1) / np.sqrt(8)
+    assert wide_mean is not None and 0.65 * own < wide_mean[1] < own
+    assert scatter_sigma([f.d for f in agree]) < 0.005  # the parts' own, as scatter_sigma gives without a prior
+
+
+def _parts(d: float, spread: float) -> tuple[PartFit, ...]:
+    """Eight equal parts about d (px) whose sample deviation is `spread` (px)."""
+    offsets = np.array([-1.0, 1.0] * 4)
+    offsets *= spread / np.std(offsets, ddof=1)
+    return tuple(PartFit(d + o, 0.01, 100) for o in offsets)
+
+
+def test_a_tracks_parts_spread_sets_its_prior() -> None:
+    """A track not yet seen takes PRIOR_SHARE · d; one whose parts spread by 2 % of d frame after frame comes
+    to SPREAD_SHARE of that; a flat board's, whose parts agree, narrows towards none; too few parts tell
+    nothing; an ended track is forgotten."""
+    spread = PartSpread()
+    assert spread.prior(None, 20.0) == spread.prior(1, 20.0) == (PRIOR_SHARE * 20.0, PRIOR_DOF)
+    for _ in range(600):  # 20 s at 30 frames a second
+        spread.add(1, _parts(20.0, 0.4), 20.0)  # 2 % of d
+        spread.add(2, _parts(10.0, 0.001), 10.0)  # a board's parts
+        spread.add(3, _parts(10.0, 0.4)[:MIN_PARTS - 1], 10.0)
+    s0, nu0 = spread.prior(1, 30.0)
+    assert nu0 == PRIOR_DOF and np.isclose(s0, SPREAD_SHARE * 0.02 * 30.0, rtol=0.01)
+    assert spread.prior(2, 10.0)[0] < 0.01 * PRIOR_SHARE * 10.0
+    assert spread.prior(3, 10.0) == (PRIOR_SHARE * 10.0, PRIOR_DOF)
+    first = PartSpread()
+    first.add(1, _parts(20.0, 0.4), 20.0)  # one frame moves it by SPREAD_RATE of the way
+    m0 = PRIOR_SHARE / SPREAD_SHARE
+    assert np.isclose(first.prior(1, 1.0)[0], SPREAD_SHARE * (m0 + SPREAD_RATE * (0.02 - m0)))
+    spread.keep_only([2])
+    assert spread.prior(1, 20.0) == (PRIOR_SHARE * 20.0, PRIOR_DOF) and spread.prior(2, 10.0)[0] < 0.01
+
+
+def test_a_persons_1_sigma_takes_its_tracks_prior() -> None:
+    parts = _parts(20.0, 0.001)
+    person = replace(Blob((0, 0, 40, 100), np.ones((100, 40), bool), 4000, np.zeros(2), np.zeros(2), 20.0, 0.01,
+                          5.0, 0.9), parts=parts)
+
+    def never() -> list[PartFit]:
+        raise AssertionError("parts matched again")
+
+    tight, default = (0.002, PRIOR_DOF), surface_mean(list(parts))
+    got = surface_mean(list(parts), tight)
+    assert default is not None and got is not None
+    assert blob_sigma(person, never, tight) == got[1] < 0.1 * default[1] == 0.1 * blob_sigma(person, never)

@@ -55,9 +55,17 @@ COLUMNS, ROWS = 4, 2
 MIN_PARTS = 5
 FEW_PARTS_FACTOR = 2.0
 FEW_PARTS_PERSON_PX = 0.12
+# a person's parts' spread is pooled with a prior spread worth PRIOR_DOF parts: SPREAD_SHARE of its track's
+# mean spread (PartSpread, an exponential mean at SPREAD_RATE a frame), PRIOR_SHARE · d̄ before it has one
+# (surface_mean; fitted 2026-12-06 by Gaussian likelihood on six scenes' range errors, docs/evaluation.md)
+PRIOR_SHARE = 0.0085
+PRIOR_DOF = 8.0
+SPREAD_SHARE = 0.7
+SPREAD_RATE = 1.0 / 60.0
 
 
-def scatter_sigma(disparities: list[float], sigmas: list[float] | None = None) -> float:
+def scatter_sigma(disparities: list[float], sigmas: list[float] | None = None,
+                  prior: tuple[float, float] | None = None) -> float:
     """The standard error of the parts' mean disparity (px): s √Σ w_i², s their sample standard deviation,
     w_i their weights in the whole region's fit, which is about the information-weighted mean of its parts
     (w_i ∝ 1 / σ_i², σ_i each part's own fit's 1-σ, `sigmas`; s / √n with equal weights, or without
@@ -65,13 +73,19 @@ def scatter_sigma(disparities: list[float], sigmas: list[float] | None = None) -
     uneven the whole's fit is pulled towards the best textured: on walk:body at 9 to 17 m the disparity's
     error against its seen surface's was 0.12 px rms, s / √n a median 0.08 px, s √Σ w² 0.10 to 0.11 px;
     on walk:plate 0.026 px, against 0.012-0.024 and 0.013-0.028. 0 with fewer than MIN_PARTS (too few to
-    tell: the matcher's own σ then stands)."""
+    tell: the matcher's own σ then stands). prior: (s0, ν0), a prior spread s0 (px) worth ν0 parts, pooled
+    with the parts' own: s² = (ν0 s0² + (n - 1) s_parts²) / (ν0 + n - 1) (the posterior mean of a scaled
+    inverse-χ² prior on the spread's variance); None: the parts' own."""
     n = len(disparities)
     if n < MIN_PARTS:
         return 0.0
     w = np.ones(n) if sigmas is None else 1.0 / np.maximum(np.asarray(sigmas, np.float64), 1e-6) ** 2
     w /= w.sum()
-    return float(np.std(disparities, ddof=1) * np.sqrt(np.sum(w * w)))
+    var = float(np.var(disparities, ddof=1))
+    if prior is not None:
+        s0, nu0 = prior
+        var = (nu0 * s0 * s0 + (n - 1) * var) / (nu0 + n - 1)
+    return float(np.sqrt(var * np.sum(w * w)))
 
 
 def parts_sigma(disparities: list[float], matcher_sigma: float, sigmas: list[float] | None = None) -> float:
@@ -83,10 +97,14 @@ def parts_sigma(disparities: list[float], matcher_sigma: float, sigmas: list[flo
     return scatter_sigma(disparities, sigmas)
 
 
-def surface_mean(fits: list[PartFit]) -> tuple[float, float] | None:
+def surface_mean(fits: list[PartFit], prior: tuple[float, float] | None = None) -> tuple[float, float] | None:
     """The disparity of a region's seen surface's mean point (px) from its parts (part_fits over the whole
     outline): their mean weighted by their pixel counts n_i, d̄ = Σ n_i d_i / Σ n_i, and its 1-σ (px), the
     standard error s √Σ w_i² with w_i = n_i / Σ n_i (scatter_sigma). None with fewer than MIN_PARTS parts.
+    The spread s is the parts' own pooled with a prior one, `prior` = (s0 px, ν0 parts; scatter_sigma;
+    None: PRIOR_SHARE · d̄ and PRIOR_DOF, the prior of a track not yet seen, PartSpread.prior): 5 to 8
+    parts tell their spread poorly (their sample deviation is off by a quarter or more), and a frame whose
+    parts happen to agree got a 1-σ far under its error.
 
     The one disparity fitted over the whole region weights each pixel by its texture's gradient, so that
     where a walker's parts (head, torso, arms, legs) lie at depths a few centimetres apart it belongs to its
@@ -97,7 +115,47 @@ def surface_mean(fits: list[PartFit]) -> tuple[float, float] | None:
         return None
     d = np.array([f.d for f in fits])
     n = np.array([f.pixels for f in fits], np.float64)
-    return float(d @ n / n.sum()), scatter_sigma(d.tolist(), (1.0 / np.sqrt(n)).tolist())
+    mean = float(d @ n / n.sum())
+    s0 = (PRIOR_SHARE * abs(mean), PRIOR_DOF) if prior is None else prior
+    return mean, scatter_sigma(d.tolist(), (1.0 / np.sqrt(n)).tolist(), s0)
+
+
+class PartSpread:
+    """Each track's parts' spread, from which a person's disparity 1-σ takes its prior (surface_mean).
+
+    A person's parts spread by their depths and by how each is matched, and that spread grows with d (its
+    median s / d̄ 1.0-1.3 % from 5 to 70 px over six scenes of `tmeye eval`; a power law fitted d^1.02). A
+    track's mean relative spread m, an exponential mean over its frames at SPREAD_RATE a frame (about 2 s
+    at 30 frames a second; PRIOR_SHARE / SPREAD_SHARE before its first), gives each frame's prior: s0 =
+    SPREAD_SHARE · m · d̄ worth PRIOR_DOF parts. Only a share of the spread counts: real differences of
+    depth between the parts are no error of their mean. A flat board tall as a person has parts that agree
+    frame after frame, and its 1-σ narrows with them. Fitted (rate, share, parts) on the range errors of
+    walk, illumination, foliage, two-targets, pan and endless (bodies, seed 0, each weighted alike) by
+    Gaussian likelihood; with the parts' spread alone the range's 1-σ was too wide for most frames and too
+    narrow for a few (within 1σ 0.76, NEES 0.87 on walk; 0.81, 0.87 on pan), and one prior share for every
+    track (0.85 % of d̄) took endless:plate's boards from 0.65 to 0.81 within 1σ (docs/evaluation.md,
+    2026-12-06)."""
+
+    def __init__(self) -> None:
+        self._mean: dict[int, float] = {}  # track id -> m, s / d̄
+
+    def add(self, track_id: int, fits: tuple[PartFit, ...], d: float) -> None:
+        """A frame's parts (those a person's blob keeps, Blob.parts) at its disparity d (px)."""
+        if len(fits) < MIN_PARTS or d <= 0:
+            return
+        s = float(np.std([f.d for f in fits], ddof=1)) / d
+        m = self._mean.get(track_id, PRIOR_SHARE / SPREAD_SHARE)
+        self._mean[track_id] = m + SPREAD_RATE * (s - m)
+
+    def prior(self, track_id: int | None, d: float) -> tuple[float, float]:
+        """(s0, ν0): the prior spread (px) at disparity d (px) and its weight in parts (surface_mean)."""
+        m = PRIOR_SHARE / SPREAD_SHARE if track_id is None else self._mean.get(track_id, PRIOR_SHARE / SPREAD_SHARE)
+        return SPREAD_SHARE * m * abs(d), PRIOR_DOF
+
+    def keep_only(self, track_ids: list[int]) -> None:
+        """Forget the tracks not in track_ids (ended)."""
+        live = set(track_ids)
+        self._mean = {i: m for i, m in self._mean.items() if i in live}
 
 
 def on_surface(blob: Blob, fits: Callable[[], list[PartFit]]) -> Blob:
@@ -113,16 +171,16 @@ def on_surface(blob: Blob, fits: Callable[[], list[PartFit]]) -> Blob:
     return replace(blob, disparity=mean[0], parts=tuple(parts))
 
 
-def blob_sigma(blob: Blob, fits: Callable[[], list[PartFit]]) -> float:
+def blob_sigma(blob: Blob, fits: Callable[[], list[PartFit]], prior: tuple[float, float] | None = None) -> float:
     """The disparity's 1-σ (px) from a blob's parts (where larger than the matcher's own, tracker.pipeline):
     a person's, from the parts it keeps (Blob.parts, on_surface): their surface_mean's, or with fewer than
     MIN_PARTS parts_sigma's stand-in and at least FEW_PARTS_PERSON_PX; any other's, parts_sigma of fits()
     (the parts of the window it was matched on). A blob seen by one camera has its held disparity's 1-σ
-    (tracker.one_camera)."""
+    (tracker.one_camera). prior: a person's parts' prior spread (surface_mean; PartSpread.prior)."""
     if blob.one_camera:
         return blob.disparity_sigma
     if blob.parts:
-        mean = surface_mean(list(blob.parts))
+        mean = surface_mean(list(blob.parts), prior)
         if mean is not None:
             return mean[1]
     person = whole_outline(blob.mask)  # its parts are those on_surface kept, none matched again

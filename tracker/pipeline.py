@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from tracker.bgdepth import BackgroundDepth, CorrespondenceMap
 from tracker.bglearn import LearntBackground, Sighting, StreamLearnConfig, StreamLearner, changed_box
 from tracker.detect import Box, DetectorConfig, StereoSubtractor
-from tracker.disparity_sigma import blob_sigma, on_surface
+from tracker.disparity_sigma import PartSpread, blob_sigma, on_surface
 from tracker.egomotion import PoseCompensation
 from tracker.frames import StereoFrame
 from tracker.geometry import StereoRig
@@ -92,6 +92,7 @@ class Pipeline:
         self.heights = HeightHistory()
         self.extents = ExtentHistory()
         self.headings = HeadingHistory()
+        self.spread = PartSpread()  # each track's parts' spread: a person's disparity 1-σ's prior
         self.visibility, self.outline, self.rim_contrast = VisibilityConfig(), OutlineConfig(), RimContrastConfig()
         self._last_gain = 1.0
         # the last frame, its objects, their track ids, its tracks' hints and all it was verified with
@@ -173,8 +174,10 @@ class Pipeline:
         # from centroids and disparities alone (not their σ), as seen at home: the mount's turning taken out
         sigma_d, alone = np.array([b.disparity_sigma for b in blobs]), np.array([b.one_camera for b in blobs], bool)
         ids = self.tracker.update(frame.t, self.ego.to_home(obs, frame.gimbal), sigma_d, alone)
-        for kept in (self.sigma_schedule, self.heights, self.extents, self.headings):
+        for kept in (self.sigma_schedule, self.heights, self.extents, self.headings, self.spread):
             kept.keep_only([tr.track_id for tr in self.tracker.tracks])
+        for blob, i in zip(blobs, ids, strict=True):
+            self.spread.add(i, blob.parts, blob.disparity)
         t_ids = time.perf_counter()
         locs = [self._locate(frame, b, blobs, i, t0) for b, i in zip(blobs, ids, strict=True)]
         self._done = (frame, blobs, ids, hints, seek)  # for `between_frames`
@@ -279,7 +282,7 @@ class Pipeline:
         x0, y0 = box[0], box[1]  # the blob's box within the ring's
         rim, shift = self._rim_px(frame, b, cm.crop((b.box[0] - x0, b.box[1] - y0, b.box[2] - x0, b.box[3] - y0)),
                                   known)
-        s_d = blob_sigma(b, partial(self.verifier.part_fits, frame, b))  # the parts' scatter
+        s_d = blob_sigma(b, partial(self.verifier.part_fits, frame, b), self.spread.prior(track_id, b.disparity))
         return SigmaTerms(s_d, extra, gap_x, rim, hidden_below, cut, whole, known, shift)
 
     def _rim_px(self, frame: StereoFrame, b: Blob, cm: CorrespondenceMap, person: bool = False
