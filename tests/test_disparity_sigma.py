@@ -221,17 +221,17 @@ def test_the_surface_mean_weighs_each_part_by_its_pixels() -> None:
 
 def test_a_persons_parts_that_happen_to_agree_keep_the_priors_spread() -> None:
     """Eight parts that agree to a hundredth of a pixel at 20 px: their own spread would give the mean a
-    1-σ of 0.004 px; pooled with the prior's (PRIOR_SHARE · d̄ worth PRIOR_DOF parts) it keeps most of
-    that spread (√(8 / 15) of it), and parts that disagree widely most of theirs (√(7 / 15))."""
+    1-σ of 0.004 px; pooled with the prior's (PRIOR_SHARE · d̄ worth ν0 = PRIOR_DOF parts) it keeps at
+    least √(ν0 / (ν0 + 7)) of the prior's, and parts that disagree widely keep √(7 / (ν0 + 7)) of theirs."""
     agree = [PartFit(20.0 + 0.01 * (i % 2), 0.01, 100) for i in range(8)]
     mean = surface_mean(agree)
     assert mean is not None
     prior_only = PRIOR_SHARE * mean[0] / np.sqrt(8)
-    assert 0.7 * prior_only < mean[1] < prior_only
+    assert np.sqrt(PRIOR_DOF / (PRIOR_DOF + 7)) * prior_only < mean[1] < prior_only
     wide = [PartFit(20.0 + (1.0 if i % 2 else -1.0), 0.01, 100) for i in range(8)]
     wide_mean = surface_mean(wide)
     own = np.std([f.d for f in wide], ddof=1) / np.sqrt(8)
-    assert wide_mean is not None and 0.65 * own < wide_mean[1] < own
+    assert wide_mean is not None and np.sqrt(7 / (PRIOR_DOF + 7)) * own < wide_mean[1] < own
     assert scatter_sigma([f.d for f in agree]) < 0.005  # the parts' own, as scatter_sigma gives without a prior
 
 
@@ -248,7 +248,7 @@ def test_a_tracks_parts_spread_sets_its_prior() -> None:
     nothing; an ended track is forgotten."""
     spread = PartSpread()
     assert spread.prior(None, 20.0) == spread.prior(1, 20.0) == (PRIOR_SHARE * 20.0, PRIOR_DOF)
-    for _ in range(600):  # 20 s at 30 frames a second
+    for _ in range(1200):  # 40 s at 30 frames a second
         spread.add(1, _parts(20.0, 0.4), 20.0)  # 2 % of d
         spread.add(2, _parts(10.0, 0.001), 10.0)  # a board's parts
         spread.add(3, _parts(10.0, 0.4)[:MIN_PARTS - 1], 10.0)

@@ -57,11 +57,12 @@ FEW_PARTS_FACTOR = 2.0
 FEW_PARTS_PERSON_PX = 0.12
 # a person's parts' spread is pooled with a prior spread worth PRIOR_DOF parts: SPREAD_SHARE of its track's
 # mean spread (PartSpread, an exponential mean at SPREAD_RATE a frame), PRIOR_SHARE · d̄ before it has one
-# (surface_mean; fitted 2026-12-06 by Gaussian likelihood on six scenes' range errors, docs/evaluation.md)
+# (surface_mean; fitted 2026-12-06 by Gaussian likelihood on six scenes' range errors with seeds 0-2,
+# docs/evaluation.md)
 PRIOR_SHARE = 0.0085
-PRIOR_DOF = 8.0
-SPREAD_SHARE = 0.7
-SPREAD_RATE = 1.0 / 60.0
+PRIOR_DOF = 12.0
+SPREAD_SHARE = 0.55
+SPREAD_RATE = 1.0 / 120.0
 
 
 def scatter_sigma(disparities: list[float], sigmas: list[float] | None = None,
@@ -125,16 +126,16 @@ class PartSpread:
 
     A person's parts spread by their depths and by how each is matched, and that spread grows with d (its
     median s / d̄ 1.0-1.3 % from 5 to 70 px over six scenes of `tmeye eval`; a power law fitted d^1.02). A
-    track's mean relative spread m, an exponential mean over its frames at SPREAD_RATE a frame (about 2 s
+    track's mean relative spread m, an exponential mean over its frames at SPREAD_RATE a frame (about 4 s
     at 30 frames a second; PRIOR_SHARE / SPREAD_SHARE before its first), gives each frame's prior: s0 =
     SPREAD_SHARE · m · d̄ worth PRIOR_DOF parts. Only a share of the spread counts: real differences of
     depth between the parts are no error of their mean. A flat board tall as a person has parts that agree
     frame after frame, and its 1-σ narrows with them. Fitted (rate, share, parts) on the range errors of
-    walk, illumination, foliage, two-targets, pan and endless (bodies, seed 0, each weighted alike) by
-    Gaussian likelihood; with the parts' spread alone the range's 1-σ was too wide for most frames and too
-    narrow for a few (within 1σ 0.76, NEES 0.87 on walk; 0.81, 0.87 on pan), and one prior share for every
-    track (0.85 % of d̄) took endless:plate's boards from 0.65 to 0.81 within 1σ (docs/evaluation.md,
-    2026-12-06)."""
+    walk, illumination, foliage, two-targets, pan and endless (bodies, seeds 0, 1 and 2, each run weighted
+    alike) by Gaussian likelihood; with the parts' spread alone the range's 1-σ was too wide for most frames
+    and too narrow for a few (within 1σ 0.76, NEES 0.87 on walk; 0.81, 0.87 on pan; seed 0), and one prior
+    share for every track (0.85 % of d̄) took endless:plate's boards from 0.65 to 0.81 within 1σ
+    (docs/evaluation.md, 2026-12-06)."""
 
     def __init__(self) -> None:
         self._mean: dict[int, float] = {}  # track id -> m, s / d̄
