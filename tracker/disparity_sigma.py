@@ -11,30 +11,31 @@ On the scenes of `tmeye eval` these made the disparity's error 1.3 (walk) to 20 
 matcher's 1-σ (0.026 and 0.137 px rms against 0.008 and 0.006 px).
 
 All of these show in how the disparities of parts of the region disagree: the region is cut into a grid of
-`COLUMNS` x `ROWS` parts over the window the matcher uses, each part refined on its own, and
-the standard error of their mean, s √Σ w_i² (s their sample standard deviation, w_i their weights: s / √n
-with n parts alike), is the 1-σ of the region's disparity. For most regions that disparity is the one fit
-over the window, about the parts' information-weighted mean (scatter_sigma); for a person's region it is
-the parts' mean weighted by their pixel counts itself (surface_mean, on_surface: the mean of the surface
-seen, where the one fit leans on the best-textured parts). The spread s also holds real differences of
-depth between the parts (an arm before the torso), which are no error of their mean: where they are large
-the 1-σ is wider than the mean's error, where a person stands still and its parts agree it may be
-narrower (endless:body's standing walkers, 29 % within 1σ; docs/evaluation.md). The grid has 8 parts so that the
-σ estimate itself is not too noisy (with 4 parts the normalised errors follow Student's t with 3 degrees
-of freedom, whose variance is 3). Where fewer than MIN_PARTS parts match (a far target, about 36 px wide
-at 20 to 30 m in approach), the scatter cannot be told; the matcher's own σ times FEW_PARTS_FACTOR, the
-median ratio of the two where both are known (1.8 to 2.1 on every scene of `tmeye eval`), stands for it:
-approach's far frames had a disparity error of 2.2 times the matcher's σ rms, and a range NEES of 4.6.
-Not so for a person (an upright outline): where fewer than MIN_PARTS of its parts match, its disparity is
-the one fit over its outline, whose error is set by which of its limbs, rims and gaps the fit leans on,
-not by the matcher's noise: on such frames of endless:body (645, at 7 to 18 px) and walk:body (66, at 36
-to 62 px) the disparity's error against the seen surface was 8 times the matcher's σ (median). Its 1-σ is
-then at least FEW_PARTS_PERSON_PX: fitted, by Student-t (ν = 4) likelihood, to the range errors (against
-the volume centre, the rest of the range's 1-σ as it is) of those frames on six scenes (endless, walk,
-illumination, foliage, two-targets, pan; each weighted alike), 0.12 px; within 1σ then 0.67-0.78 on
-all but two-targets (29 frames, 0.48). A fixed share of the disparity fits the seen surface alike (1.3 %
-at 8 to 60 px) but not the range: a near walker's face error is mostly the depth its limbs swing through,
-which the body's own prior (SolidPrior) covers, so 1.3 % put 89-98 % of those frames within 1σ.
+`COLUMNS` x `ROWS` parts over the window the matcher uses, each part refined on its own, and the standard
+error of their mean, s √Σ w_i² (s their sample standard deviation, w_i their weights: s / √n with n parts
+alike), is the 1-σ of the region's disparity. For most regions that disparity is the one fit over the
+window, about the parts' information-weighted mean (scatter_sigma); for a person's region it is the parts'
+mean weighted by their pixel counts itself (surface_mean, on_surface: the mean of the surface seen, where
+the one fit leans on the best-textured parts). The spread s also holds real differences of depth between the
+parts (an arm before the torso), which are no error of their mean: where they are large the 1-σ is wider
+than the mean's error, where a person stands still and its parts agree it may be narrower (endless:body's
+standing walkers, 29 % within 1σ; docs/evaluation.md). The grid has 8 parts so that the σ estimate itself is
+not too noisy (with 4 parts the normalised errors follow Student's t with 3 degrees of freedom, whose
+variance is 3); even 8 tell it poorly, and a person's spread is pooled with a prior one its track has shown
+(PartSpread, surface_mean). Where fewer than MIN_PARTS parts match (a far target, about 36 px wide at 20 to
+30 m in approach), the scatter cannot be told; the matcher's own σ times FEW_PARTS_FACTOR, the median ratio
+of the two where both are known (1.8 to 2.1 on every scene of `tmeye eval`), stands for it: approach's far
+frames had a disparity error of 2.2 times the matcher's σ rms, and a range NEES of 4.6. Not so for a person
+(an upright outline): where fewer than MIN_PARTS of its parts match, its disparity is the one fit over its
+outline, whose error is set by which of its limbs, rims and gaps the fit leans on, not by the matcher's
+noise: on such frames of endless:body (645, at 7 to 18 px) and walk:body (66, at 36 to 62 px) the
+disparity's error against the seen surface was 8 times the matcher's σ (median). Its 1-σ is then at least
+FEW_PARTS_PERSON_PX: fitted, by Student-t (ν = 4) likelihood, to the range errors (against the volume
+centre, the rest of the range's 1-σ as it is) of those frames on six scenes (endless, walk, illumination,
+foliage, two-targets, pan; each weighted alike), 0.12 px; within 1σ then 0.67-0.78 on all but two-targets
+(29 frames, 0.48). A fixed share of the disparity fits the seen surface alike (1.3 % at 8 to 60 px) but not
+the range: a near walker's face error is mostly the depth its limbs swing through, which the body's own
+prior (SolidPrior) covers, so 1.3 % put 89-98 % of those frames within 1σ.
 """
 
 from __future__ import annotations
