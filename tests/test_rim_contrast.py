@@ -14,7 +14,7 @@ from sim_helpers import run_frames
 
 from tracker.localize import Localizer
 from tracker.rectify import Rectifier
-from tracker.rim_contrast import RimContrastConfig, faint_shares, rim_shift_px, rim_sigma_px
+from tracker.rim_contrast import RimContrastConfig, faint_shares, grown_shift_y, rim_shift_px, rim_sigma_px
 from tracker.sim.rig import default_rig
 from tracker.solid_prior import SolidPrior
 
@@ -233,3 +233,25 @@ def test_a_raw_shift_is_carried_into_rectified_pixels_by_the_local_jacobian() ->
             got = rect.shift_to_rect(np.array(at), shift)
             assert np.allclose(got, want, atol=0.01), (at, shift, got, want)
     assert np.array_equal(rect.shift_to_rect(np.array([5.0, 5.0]), (0.0, 0.0)), np.zeros(2))
+
+
+def test_a_round_bodys_faint_rows_beyond_its_outline_move_its_centroid() -> None:
+    """A body's two bottom rows changed from the background by 6 grey levels (under ε = 12, over the
+    4-level floor) lie outside its outline: grown by up to two rings of such pixels the centroid moves down
+    by a pixel; by one ring, half that. Pixels changed by ε or more, or within the background's own
+    deviation (3 D), are not taken."""
+    bg = np.full((40, 40), 100.0, np.float32)
+    dev = np.zeros_like(bg)
+    image = np.full((40, 40), 100, np.uint8)
+    image[10:18, 10:20] = 150  # the outline: rows 10-17
+    image[18:20, 10:20] = 106  # its faint rows
+    mask, box = np.ones((8, 10), bool), (10, 10, 20, 18)
+    assert grown_shift_y(mask, box, image, (bg, dev), 1.0, 12.0, CFG) == pytest.approx(1.0)
+    one = RimContrastConfig(grow_rings=1)
+    assert grown_shift_y(mask, box, image, (bg, dev), 1.0, 12.0, one) == pytest.approx(0.5)
+    strong = image.copy()
+    strong[18:20, 10:20] = 112  # changed by ε: eq. (9) would have taken them, so they are something else
+    assert grown_shift_y(mask, box, strong, (bg, dev), 1.0, 12.0, CFG) == 0.0
+    noisy = dev.copy()
+    noisy[18:20] = 3.0  # a background that moves by 3 levels: 6 is within 3 D
+    assert grown_shift_y(mask, box, image, (bg, noisy), 1.0, 12.0, CFG) == 0.0

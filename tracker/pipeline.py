@@ -35,6 +35,7 @@ from tracker.rim_contrast import (
     RimContrastConfig,
     faint_shares,
     faint_shares_of,
+    grown_shift_y,
     rim_shift_px,
     rim_sigma_px,
     stereo_residual,
@@ -311,8 +312,12 @@ class Pipeline:
             shares = faint_shares(b.mask, b.box, frame.left, model[0], gain, self.rim_contrast)
         corrected = (not wide, not (wide or person))  # a curved rim's band (rim_contrast.rim_shift_px)
         undone = (not wide, not wide)  # and a person's faint bottom, its legs over the ground
-        return (rim_sigma_px(shares, self.rim_contrast, corrected, model is None),
-                rim_shift_px(shares, b.mask, self.rim_contrast, undone, model is not None, person))
+        shift = rim_shift_px(shares, b.mask, self.rim_contrast, undone, model is not None, person)
+        if model is not None and corrected[1]:  # a round body, still: its faint rows beyond, where more
+            grown = grown_shift_y(b.mask, b.box, frame.left, model, self.temporal.gain or b.gain,
+                                  self.subtractor.cfg.epsilon, self.rim_contrast)
+            shift = (shift[0], grown if abs(grown) > abs(shift[1]) else shift[1])
+        return rim_sigma_px(shares, self.rim_contrast, corrected, model is None), shift
 
     def between_frames(self, deadline: float) -> None:
         """In real time, after a frame's results are out and before the next frame is due (`deadline`,
