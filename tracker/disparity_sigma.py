@@ -66,6 +66,12 @@ SPREAD_SHARE = 0.55
 SPREAD_RATE = 1.0 / 120.0
 
 
+def first_prior(d: float) -> tuple[float, float]:
+    """(s0, ν0): the prior spread (px) of a person's parts at disparity d (px) before its track has shown
+    its own (PartSpread.prior), PRIOR_SHARE · d worth PRIOR_DOF parts."""
+    return PRIOR_SHARE * abs(d), PRIOR_DOF
+
+
 def scatter_sigma(disparities: list[float], sigmas: list[float] | None = None,
                   prior: tuple[float, float] | None = None) -> float:
     """The standard error of the parts' mean disparity (px): s √Σ w_i², s their sample standard deviation,
@@ -104,7 +110,7 @@ def surface_mean(fits: list[PartFit], prior: tuple[float, float] | None = None) 
     outline): their mean weighted by their pixel counts n_i, d̄ = Σ n_i d_i / Σ n_i, and its 1-σ (px), the
     standard error s √Σ w_i² with w_i = n_i / Σ n_i (scatter_sigma). None with fewer than MIN_PARTS parts.
     The spread s is the parts' own pooled with a prior one, `prior` = (s0 px, ν0 parts; scatter_sigma;
-    None: PRIOR_SHARE · d̄ and PRIOR_DOF, the prior of a track not yet seen, PartSpread.prior): 5 to 8
+    None: first_prior(d̄), the prior of a track not yet seen): 5 to 8
     parts tell their spread poorly (their sample deviation is off by a quarter or more), and a frame whose
     parts happen to agree got a 1-σ far under its error.
 
@@ -118,8 +124,7 @@ def surface_mean(fits: list[PartFit], prior: tuple[float, float] | None = None) 
     d = np.array([f.d for f in fits])
     n = np.array([f.pixels for f in fits], np.float64)
     mean = float(d @ n / n.sum())
-    s0 = (PRIOR_SHARE * abs(mean), PRIOR_DOF) if prior is None else prior
-    return mean, scatter_sigma(d.tolist(), (1.0 / np.sqrt(n)).tolist(), s0)
+    return mean, scatter_sigma(d.tolist(), (1.0 / np.sqrt(n)).tolist(), first_prior(mean) if prior is None else prior)
 
 
 class PartSpread:
@@ -146,13 +151,14 @@ class PartSpread:
         if len(fits) < MIN_PARTS or d <= 0:
             return
         s = float(np.std([f.d for f in fits], ddof=1)) / d
-        m = self._mean.get(track_id, PRIOR_SHARE / SPREAD_SHARE)
+        m = self._mean.get(track_id, PRIOR_SHARE / SPREAD_SHARE)  # its first frame's prior: first_prior's
         self._mean[track_id] = m + SPREAD_RATE * (s - m)
 
     def prior(self, track_id: int | None, d: float) -> tuple[float, float]:
-        """(s0, ν0): the prior spread (px) at disparity d (px) and its weight in parts (surface_mean)."""
-        m = PRIOR_SHARE / SPREAD_SHARE if track_id is None else self._mean.get(track_id, PRIOR_SHARE / SPREAD_SHARE)
-        return SPREAD_SHARE * m * abs(d), PRIOR_DOF
+        """(s0, ν0): the prior spread (px) at disparity d (px) and its weight in parts (surface_mean);
+        first_prior for a track not yet seen (or none)."""
+        m = None if track_id is None else self._mean.get(track_id)
+        return first_prior(d) if m is None else (SPREAD_SHARE * m * abs(d), PRIOR_DOF)
 
     def keep_only(self, track_ids: list[int]) -> None:
         """Forget the tracks not in track_ids (ended)."""

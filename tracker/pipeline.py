@@ -304,18 +304,19 @@ class Pipeline:
         model = self.subtractor.left_background(frame.gimbal)
         if model is None and person:
             return None, (0.0, 0.0)
+        gain = self.temporal.gain or b.gain
         if model is None:
             res, tested = stereo_residual(frame.left, frame.right, b.box, b.mask, b.disparity, cm, self.rect)
             shares = faint_shares_of(b.mask, res, tested, self.rim_contrast)
         else:
-            gain = self.temporal.gain or b.gain
             shares = faint_shares(b.mask, b.box, frame.left, model[0], gain, self.rim_contrast)
         corrected = (not wide, not (wide or person))  # a curved rim's band (rim_contrast.rim_shift_px)
         undone = (not wide, not wide)  # and a person's faint bottom, its legs over the ground
         shift = rim_shift_px(shares, b.mask, self.rim_contrast, undone, model is not None, person)
-        if model is not None and corrected[1]:  # a round body, still: its faint rows beyond, where more
-            grown = grown_shift_y(b.mask, b.box, frame.left, model, self.temporal.gain or b.gain,
-                                  self.subtractor.cfg.epsilon, self.rim_contrast)
+        if model is not None and corrected[1]:  # a round body, still: its faint rows beyond the outline,
+            # measured, where they move it further than the band expected (rim_contrast.grown_shift_y)
+            grown = grown_shift_y(b.mask, b.box, frame.left, model, gain, self.subtractor.cfg.epsilon,
+                                  self.rim_contrast)
             shift = (shift[0], grown if abs(grown) > abs(shift[1]) else shift[1])
         return rim_sigma_px(shares, self.rim_contrast, corrected, model is None), shift
 
