@@ -27,6 +27,8 @@ BoolA = NDArray[np.bool_]
 
 _MATCH_HALF_SLANT = (12, 8)  # the same when the larger ones match nowhere (slanted faces, near)
 _SEARCH_RADIUS = 4  # px about a disparity that refining from failed to match (RegionMatcher.search_radius)
+_MIN_COLS = 8  # columns of a region near the image's left edge kept for the search (RegionMatcher._strips)
+_EDGE_COLS = 4  # the fewer kept, over all its rows, to look past that search's reach (RegionMatcher._beyond_reach)
 _ONE = OneCameraConfig()  # its depth_tol_px and cover_px: what a nearer background hides from the right camera
 
 
@@ -125,14 +127,30 @@ class RegionMatcher:
         for part in row_thirds(region):
             strips = self._strips(frame, box, part, None)
             coarse = None if strips is None else strips.match(part, None, 0)
-            if coarse is not None:
-                return coarse.disparity
+            if coarse is not None and strips is not None:
+                return None if strips.clipped and self._beyond_reach(frame, box, part, strips.d_hi) else \
+                    coarse.disparity
         return None
 
+    def _beyond_reach(self, frame: StereoFrame, box: Box, region: BoolA, d_hi: int) -> bool:
+        """Whether a region near the image's left edge, whose search the edge cut short at d_hi (px: the
+        right camera does not see left columns x < d, so a window of the region's right part reaches no
+        further than its own columns less 3), matches best past d_hi on a window of its last _EDGE_COLS
+        columns and all its rows: then the peak the search found inside its reach may be a false one, and the region's
+        disparity is not known this frame. endless:body with seed 2, frames 1959-1973: a walker stepping
+        in at the left edge, 32-44 px of it seen and 21 px of disparity, matched at 13.6-15.2 px on its
+        last 8 columns (the search reached 18 px), a range 4.6-5.3 m too far with a 1-σ of 0.2-0.4 m."""
+        narrow = self._strips(frame, box, region, None, (MATCH_HALF[0], 1 << 16), min_cols=_EDGE_COLS)
+        if narrow is None or narrow.d_hi <= d_hi:
+            return False
+        far = narrow.match(region, None, 0)
+        return far is not None and far.disparity > d_hi + 1.0
+
     def _strips(self, frame: StereoFrame, box: Box, region: BoolA, d_hint: float | None,
-                half: tuple[int, int] = MATCH_HALF) -> Strips | None:
+                half: tuple[int, int] = MATCH_HALF, min_cols: int = _MIN_COLS) -> Strips | None:
         """Rectified left/right strips around a region's rows, wide enough for the disparity search; the
-        window matched is the region's central 2 half[0] x 2 half[1] px at most."""
+        window matched is the region's central 2 half[0] x 2 half[1] px at most, and near the image's left
+        edge its last min_cols columns at least."""
         rect, cfg = self.rect, self.cfg
         x0, y0, x1, y1 = box
         bx, by, bw, bh = cv2.boundingRect(region.view(np.uint8))
@@ -152,9 +170,9 @@ class RegionMatcher:
         rx0, rx1 = max(rx0, cx - half[0]), min(rx1, cx + half[0])
         ry0, ry1 = max(ry0, cy - half[1]), min(ry1, cy + half[1])
         d_hi = cfg.max_disparity if d_hint is None else int(np.ceil(d_hint)) + 8
-        # near the left edge the search range runs out of image: keep at least 8 columns of the region
-        # (its right part) and search as far as the image allows
-        rx0 = max(rx0, min(d_hi + 3, rx1 - 8))
+        # near the left edge the search range runs out of image: keep at least min_cols columns of the
+        # region (its right part) and search as far as the image allows
+        rx0 = max(rx0, min(d_hi + 3, rx1 - min_cols))
         clipped = rx0 - 3 < d_hi
         d_hi = min(d_hi, rx0 - 3)
         rx1 = min(rx1, w - 2)  # at the right edge, match on the part inside the image

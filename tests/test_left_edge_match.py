@@ -1,0 +1,71 @@
+"""A region at the image's left edge whose disparity lies past what its search can reach
+(tracker.region_match.RegionMatcher._beyond_reach): the right camera does not see left columns x < d, so
+the search on the region's last columns stops short of its disparity, and where the right image beside the
+object looks like it a few pixels on (here drawn so: the object's texture, noisy, PERIOD px right of it)
+the search takes a false peak inside its reach. The region's disparity is then not known that frame; where
+the region is wide enough to reach its own disparity, it is found."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import cv2
+import numpy as np
+
+from tracker.frames import StereoFrame
+from tracker.pipeline import Pipeline
+from tracker.sim.scenarios import SimRig, get_scenario
+
+D = 23.0  # the object's disparity (px)
+PERIOD = 7  # the right image PERIOD px right of the object looks like it: a false peak at D - PERIOD
+ROWS = (200, 320)  # its rows (rectified)
+
+
+def _texture(seed: int = 3) -> np.ndarray:
+    """A smooth random texture over the rectified image and 64 px more, (480, 704) float32 grey levels."""
+    t = cv2.GaussianBlur(np.random.default_rng(seed).normal(0.0, 1.0, (480, 704)).astype(np.float32), (0, 0), 1.2)
+    return (128.0 + 40.0 * t / t.std()).astype(np.float32)
+
+
+def _pair(right_edge: float) -> tuple[Pipeline, StereoFrame, tuple[int, int, int, int], np.ndarray]:
+    """The walk scene's empty pair learnt, then an object over the rectified columns left of `right_edge`
+    (it goes on past the image's left edge) and ROWS, at disparity D, drawn into both raw images through
+    the rectification: the pipeline, the frame, the region's box (raw left px) and its mask over the box."""
+    sim = SimRig(get_scenario("walk"), seed=0)
+    pipe = Pipeline(sim.rig)
+    empty = sim.background()
+    pipe.learn_background(empty)
+    rect = pipe.verifier.rect
+    tex = _texture()
+    noise = np.random.default_rng(5).normal(0.0, 12.0, (480, 640)).astype(np.float32)
+    images = []
+    masks = []
+    for cam, shifts in ((0, (0.0,)), (1, (D - PERIOD, D))):  # the right camera sees left column u at u - D
+        raw = (empty.left if cam == 0 else empty.right).astype(np.float32)
+        rc = rect.rect_of_raw[cam]
+        for shift in shifts:  # the decoy first, then the object over it
+            u, v = rc[..., 0] + np.float32(shift), rc[..., 1]
+            inside = (u < right_edge) & (v >= ROWS[0]) & (v < ROWS[1])
+            drawn = cv2.remap(tex, u + np.float32(32.0), v, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+            raw[inside] = drawn[inside] + (noise[inside] if shift != D and cam == 1 else 0.0)
+        images.append(np.clip(raw, 0, 255).astype(np.uint8))
+        masks.append(inside)
+    ys, xs = np.nonzero(masks[0])
+    box = (0, int(ys.min()), int(xs.max()) + 1, int(ys.max()) + 1)
+    region = masks[0][box[1]:box[3], box[0]:box[2]]
+    return pipe, replace(empty, left=images[0], right=images[1]), box, region
+
+
+def test_a_region_whose_disparity_lies_past_the_edge_cut_search_is_not_given_a_false_one() -> None:
+    pipe, frame, box, region = _pair(32.0)
+    strips = pipe.verifier._strips(frame, box, region, None)
+    assert strips is not None and strips.clipped and strips.d_hi < D  # the search cannot reach D
+    near = strips.match(region, None, 0)
+    assert near is not None and abs(near.disparity - (D - PERIOD)) < 1.0  # the false peak it would take
+    assert pipe.verifier._coarse_disparity(frame, box, region, None) is None
+
+
+def test_a_region_wide_enough_to_reach_its_disparity_is_matched_there() -> None:
+    pipe, frame, box, region = _pair(60.0)
+    d = pipe.verifier._coarse_disparity(frame, box, region, None)
+    assert d is not None and abs(d - D) < 0.5
