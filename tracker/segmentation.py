@@ -244,16 +244,33 @@ class ExtentHistory:
     whole bounded its x 1-σ to 0.25 px, for azimuth errors of 0.70 to 1.03° (13 to 15 σ, a fifth of the
     scenario's azimuth NEES); with the excess, 0.8 to 1.7 σ."""
 
-    def __init__(self, frames: int = 15, min_frames: int = 3, round_px: float = 1.0):
+    def __init__(self, frames: int = 15, min_frames: int = 3, round_px: float = 1.0, fade: float = 0.35):
         self.frames = frames
         self.min_frames = min_frames
         self.round_px = round_px
+        self.fade = fade
         # track id -> the w / d, h / d and A / d² values kept
         self._kept: dict[int, tuple[list[float], list[float], list[float]]] = {}
+        self._last: dict[int, tuple[float, float]] = {}  # track id -> the cut 1-σ (px, x and y) last given
 
     def cut_sigma_px(self, track_id: int, extent_px: tuple[float, float], area_px: float, disparity: float,
                      cut_px: tuple[float, float], seen_whole: tuple[bool, bool] = (True, True),
                      edge_px: tuple[float, float] | None = None) -> tuple[float, float]:
+        """`bounded_sigma_px`, at least `fade` times what the track's last sighting was given: the cut is
+        not found in every frame (endless:body with seed 2, frames 1988-1991: a walker going behind a crate
+        had an x term of 20.7, 2.9, 0.07 and 7.1 px; at 1990 its azimuth 1-σ was 0.016° for an error of
+        0.50°), and what was hidden comes back into view over frames, not at once. fade 0.35 against 0.5:
+        `eval --all` seed 0 kept its 120 lines met (118 with 0.5: two 1-σ lines one frame over their band's
+        top as what was hidden came back), endless:body's azimuth NEES 1.40 -> 1.31 (1.28)."""
+        got = self.bounded_sigma_px(track_id, extent_px, area_px, disparity, cut_px, seen_whole, edge_px)
+        last = self._last.get(track_id, (0.0, 0.0))
+        out = (max(got[0], self.fade * last[0]), max(got[1], self.fade * last[1]))
+        self._last[track_id] = out
+        return out
+
+    def bounded_sigma_px(self, track_id: int, extent_px: tuple[float, float], area_px: float, disparity: float,
+                         cut_px: tuple[float, float], seen_whole: tuple[bool, bool] = (True, True),
+                         edge_px: tuple[float, float] | None = None) -> tuple[float, float]:
         """The cut sides' 1-σ (px, x and y) for a track's outline of extent_px (width, height, px) and
         area_px (px²) at disparity d (px), given kappa's (cut_px; (0, 0): seen whole) and whether its
         width and height were seen whole (kept for later frames). edge_px: the outline's outermost runs
@@ -336,3 +353,4 @@ class ExtentHistory:
         """Forget the extents of tracks not in track_ids (ended)."""
         live = set(track_ids)
         self._kept = {i: v for i, v in self._kept.items() if i in live}
+        self._last = {i: v for i, v in self._last.items() if i in live}
