@@ -130,6 +130,8 @@ def test_a_new_region_that_matches_nowhere_whole_is_searched_by_thirds(monkeypat
     calls: list[int] = []
 
     class Strips:
+        clipped, d_hi = False, 160  # the search not cut short by the image's left edge
+
         def __init__(self, region: np.ndarray) -> None:
             self.n = int(np.count_nonzero(region))
 

@@ -127,19 +127,20 @@ class RegionMatcher:
         for part in row_thirds(region):
             strips = self._strips(frame, box, part, None)
             coarse = None if strips is None else strips.match(part, None, 0)
-            if coarse is not None and strips is not None:
-                return None if strips.clipped and self._beyond_reach(frame, box, part, strips.d_hi) else \
-                    coarse.disparity
+            if strips is None or coarse is None:
+                continue
+            return None if strips.clipped and self._beyond_reach(frame, box, part, strips.d_hi) else coarse.disparity
         return None
 
     def _beyond_reach(self, frame: StereoFrame, box: Box, region: BoolA, d_hi: int) -> bool:
         """Whether a region near the image's left edge, whose search the edge cut short at d_hi (px: the
         right camera does not see left columns x < d, so a window of the region's right part reaches no
         further than its own columns less 3), matches best past d_hi on a window of its last _EDGE_COLS
-        columns and all its rows: then the peak the search found inside its reach may be a false one, and the region's
-        disparity is not known this frame. endless:body with seed 2, frames 1959-1973: a walker stepping
-        in at the left edge, 32-44 px of it seen and 21 px of disparity, matched at 13.6-15.2 px on its
-        last 8 columns (the search reached 18 px), a range 4.6-5.3 m too far with a 1-σ of 0.2-0.4 m."""
+        columns and all its rows: then the peak the search found inside its reach may be a false one,
+        and the region's disparity is not known this frame. endless:body with seed 2, frames 1959-1973: a
+        walker stepping in at the left edge, 32-44 px of it seen and 21 px of disparity, matched at
+        13.6-15.2 px on its last 8 columns (the search reached 18 px), a range 4.6-5.3 m too far with a
+        1-σ of 0.2-0.4 m."""
         narrow = self._strips(frame, box, region, None, (MATCH_HALF[0], 1 << 16), min_cols=_EDGE_COLS)
         if narrow is None or narrow.d_hi <= d_hi:
             return False
