@@ -140,7 +140,9 @@ class RegionMatcher:
         and the region's disparity is not known this frame. endless:body with seed 2, frames 1959-1973: a
         walker stepping in at the left edge, 32-44 px of it seen and 21 px of disparity, matched at
         13.6-15.2 px on its last 8 columns (the search reached 18 px), a range 4.6-5.3 m too far with a
-        1-σ of 0.2-0.4 m."""
+        1-σ of 0.2-0.4 m. The narrow window reaches only _MIN_COLS - _EDGE_COLS px further, so a region
+        whose disparity lies further still past the first reach is not told from one matched right: as a
+        region comes in at the edge it widens, and its disparity passes through those few pixels first."""
         narrow = self._strips(frame, box, region, None, (MATCH_HALF[0], 1 << 16), min_cols=_EDGE_COLS)
         if narrow is None or narrow.d_hi <= d_hi:
             return False
