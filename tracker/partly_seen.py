@@ -82,3 +82,17 @@ def legs_aside_px(mask: BoolA, hidden_from: int) -> float:
     if n_low == 0 or n_low == xs.size:
         return 0.0
     return n_low * abs(float(xs[low].mean()) - float(xs[~low].mean())) / xs.size
+
+
+def speck_rest(b: Blob, solid: SolidPrior, baseline_m: float, cut: tuple[float, float],
+               whole: tuple[bool, bool]) -> tuple[tuple[float, float], tuple[bool, bool]]:
+    """The cut terms (px, x and y; `partly_seen`'s) and seen_whole of a blob whose outline is a speck
+    (SolidPrior.speck: smaller along both axes than any whole body the prior is for): the rest of the body
+    may lie anywhere about it, as for a person's fragment (SolidPrior.unseen_rest_px), whether or not a cut
+    was found (a cut side's term, a share of the speck's own extent, describes the same hidden part: the
+    larger holds); neither axis seen whole. Others unchanged."""
+    _, _, w, h = cv2.boundingRect(b.mask.view(np.uint8))
+    if not solid.speck(float(w), float(h), b.disparity, baseline_m):
+        return cut, whole
+    rx, ry = solid.unseen_rest_px(float(w), float(h), b.disparity, baseline_m, (False, False))
+    return (max(cut[0], rx or 0.0), max(cut[1], ry or 0.0)), (False, False)

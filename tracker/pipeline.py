@@ -27,7 +27,7 @@ from tracker.heading import HeadingHistory
 from tracker.localize import Localization, Localizer, with_gap_x
 from tracker.one_camera import OneCameraConfig
 from tracker.outline import OutlineConfig, warped_outline_sigma_px
-from tracker.partly_seen import partly_seen
+from tracker.partly_seen import partly_seen, speck_rest
 from tracker.rectify import Rectifier
 from tracker.regions import hints_inside
 from tracker.results import Blob, Detection, FrameResult
@@ -380,6 +380,8 @@ class Pipeline:
         solid = self.localizer.solid  # a person whose top alone shows now: its track showed it whole
         known = hidden_below and not upright and solid is not None and track_id is not None and \
             self.extents.seen_upright(track_id, solid.upright_aspect)
+        if solid is not None and not (upright or known):  # a speck: a piece of a body, its rest unseen
+            cut, whole = speck_rest(b, solid, self.rect.b, cut, whole)
         edge, (gap_x, gap_y) = outline_sigma_px(b.mask)
         px, py = 0.0, 0.0
         # a car's cabin over its body, the space between a person's legs: their shape; a person's x: its
