@@ -12,7 +12,7 @@ import pytest
 from tracker import strips as st
 from tracker.geometry import Camera, StereoRig
 from tracker.rectify import Rectifier
-from tracker.stereo import match_region
+from tracker.stereo import RegionMatch, match_region
 
 FIXTURE = Path(__file__).parent / "fixtures" / "far_head_strips.npz"
 TRUE_D = 6.56  # the head's rectified disparity in that frame (the simulator's truth)
@@ -85,6 +85,26 @@ def test_where_its_outline_disagrees_a_small_tracked_region_takes_the_whole_regi
     monkeypatch.setattr(st, "_agrees", lambda *a, **k: True)  # without outline_agrees' check: the core's match
     fit = strips.match(region, d0, 4, whole_ok=True)
     assert fit is not None and fit.disparity > TRUE_D + 2.0
+
+
+def test_a_whole_regions_peak_is_as_uncertain_as_its_distance_from_the_tracks_prediction(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # the peak and the prediction disagree and neither is known right (a sliver beside a post takes the
+    # post's edge; a coasting prediction drifts): the 1-σ is widened by half their distance
+    h = _far_head()
+    strips, region = _strips_over(h, monkeypatch)
+    d0 = float(h["d0"])
+    core_fit = match_region(h["left"], h["right"], h["core"], int(h["off"]), 0, int(h["d_hi"]), d0,
+                            search_radius=4, min_score=st.MIN_SCORE)
+    assert core_fit is not None
+    raw = st.whole_match(h["left"], h["right"], h["whole"], int(h["off"]), core_fit.disparity)
+    fit = strips.match(region, d0, 4, whole_ok=True)
+    assert raw is not None and fit is not None and fit.disparity == raw.disparity
+    assert fit.sigma == pytest.approx(float(np.hypot(raw.sigma, 0.5 * abs(raw.disparity - d0))))
+    assert fit.sigma > raw.sigma
+    far = st.disputed(RegionMatch(14.0, 0.1, 0.7, 1.0), 11.0)  # seed 2's sliver: 3 px from its prediction
+    assert far.sigma == pytest.approx(float(np.hypot(0.1, 1.5))) and far.disparity == 14.0 and far.score == 0.7
+    assert st.disputed(RegionMatch(11.0, 0.1, 0.7, 1.0), 11.0).sigma == pytest.approx(0.1)
 
 
 def _periodic_bar(period: int, d: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
