@@ -321,3 +321,22 @@ def test_the_temporal_outline_keeps_a_head_past_the_necks_gap_but_no_part_beside
     out = with_head(body | below | beside | speck | head)
     assert out[head].all() and out[body].all()
     assert not out[below].any() and not out[beside].any() and not out[speck].any()
+
+
+def test_a_far_walkers_small_head_past_the_necks_gap_is_kept_a_smaller_speck_is_not() -> None:
+    # endless:body seed 1, frames 1106-1202: a walker standing at 14 m, 25 x 47 px below its shoulders, its
+    # head a disc 9 px across two rows above them (about 60 px); under the 64 px once asked of a head it was
+    # left out, and placed from its shoulders the walker's centre lay 0.7 deg low (elevation z -3.7)
+    from tracker.masks import HEAD_MIN_PX, with_head
+
+    body = np.zeros((80, 60), bool)
+    body[20:67, 18:43] = True
+    yy, xx = np.mgrid[0:80, 0:60]
+    head = (yy - 13) ** 2 + (xx - 30) ** 2 <= 4.5**2  # rows 9-17, 2 rows of background above the shoulders
+    contours, _ = cv2.findContours(head.view(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    assert int(head.sum()) == 69 and cv2.contourArea(contours[0]) < 64  # its outline's area, as with_head takes it
+    out = with_head(body | head)
+    assert out[head].all() and out[body].all()
+    speck = (yy - 14) ** 2 + (xx - 30) ** 2 <= 1.5**2  # 9 px of change: under HEAD_MIN_PX
+    assert int(speck.sum()) < HEAD_MIN_PX
+    assert not with_head(body | speck)[speck].any()

@@ -41,9 +41,15 @@ def largest_component(mask: BoolA, close: bool = False, every: bool = False) -> 
 
 
 # a component above an outline's largest is its head when it covers this share of the largest's pixels
-# (and HEAD_MIN_PX): a walker's head is 5 to 7 % of its silhouette; specks of change stay out
+# (and HEAD_MIN_PX, its outline's area): a walker's head is 5 to 7 % of its silhouette; specks of change
+# stay out. 64 px until 2026-12-06 left out the head of every walker past about 10 m (a disc 9 px across at
+# 14 m: 56 px): endless:body seed 1, frames 1106-1202, a walker standing at 14 m was placed from its
+# shoulders, 0.7 deg low (elevation z -3.7 over 95 frames); pan:body's elevation RMSE 0.192 / 0.208 / 0.232
+# -> 0.181 / 0.180 / 0.228 deg (seeds 0 / 1 / 2) with 16 px
 HEAD_MIN_SHARE = 0.02
-HEAD_MIN_PX = 64
+HEAD_MIN_PX = 16
+# a part below or beside an outline the left camera alone sees (`with_parts`) needs this many pixels
+PART_MIN_PX = 64
 
 
 def with_head(mask: BoolA, close: bool = False) -> BoolA:
@@ -76,7 +82,7 @@ def with_head(mask: BoolA, close: bool = False) -> BoolA:
 
 
 def with_parts(outline: BoolA, region: BoolA) -> BoolA:
-    """The outline and each other component of `region` (after a closing, holes filled; at least HEAD_MIN_PX)
+    """The outline and each other component of `region` (after a closing, holes filled; at least PART_MIN_PX)
     that is a part of its body (split.same_body at one depth), above it or below: a body the left camera
     alone sees, at the left border, whose change mask the background's bands split at the waist. There
     `with_head`'s largest component may be its legs alone (endless:body, frames 486-488: 24-32 px from the
@@ -86,7 +92,7 @@ def with_parts(outline: BoolA, region: BoolA) -> BoolA:
     out = outline.copy()
     for k in range(1, n):
         part = lab == k
-        if int(np.count_nonzero(part)) >= HEAD_MIN_PX and same_body(outline, 1.0, part, 1.0):
+        if int(np.count_nonzero(part)) >= PART_MIN_PX and same_body(outline, 1.0, part, 1.0):
             out |= part
     return out
 
