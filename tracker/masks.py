@@ -45,7 +45,7 @@ def largest_component(mask: BoolA, close: bool = False, every: bool = False) -> 
 # stay out. 64 px until 2026-12-06 left out the head of every walker past about 10 m (a disc 9 px across at
 # 14 m: 56 px): endless:body seed 1, frames 1106-1202, a walker standing at 14 m was placed from its
 # shoulders, 0.7 deg low (elevation z -3.7 over 95 frames); pan:body's elevation RMSE 0.192 / 0.208 / 0.232
-# -> 0.181 / 0.180 / 0.228 deg (seeds 0 / 1 / 2) with 16 px
+# -> 0.185 / 0.184 / 0.231 deg (seeds 0 / 1 / 2) with 16 px and SolidPrior.upright_warped_sigma refitted
 HEAD_MIN_SHARE = 0.02
 HEAD_MIN_PX = 16
 # a part below or beside an outline the left camera alone sees (`with_parts`) needs this many pixels
