@@ -121,7 +121,7 @@ class Localizer:
                in_frame: bool = True, top_px: float | None = None, swing: float | None = None,
                upright: bool | None = None, stature: tuple[float, float] | None = None,
                gait: float | None = None, warped: bool = False, top_fused: bool = False,
-               matched: float = 1.0) -> Localization:
+               matched: float = 1.0, top_sigma_px: float = 0.0) -> Localization:
         """extra_px: the centroid's further 1-σ (px) along x and y, where the target is seen only in part
         (tracker.visibility). extent_px: the target's seen width and height (px), for the SolidPrior.
         rim_px: the outline's 1-σ (px, x and y) from its rim's contrast (tracker.rim_contrast), in place of
@@ -140,7 +140,9 @@ class Localizer:
         outline's bottom was inferred, not seen (tracker.results.Blob.bottom_inferred): an upright body's
         centre from its top (top_px) and the one from its centroid and shift are fused (`fused`). matched: for
         a round body, its centre's depth behind the face its matched pixels measure over the prior's
-        (tracker.round_face.matched_factor; SolidPrior.behind_face_px)."""
+        (tracker.round_face.matched_factor; SolidPrior.behind_face_px). top_sigma_px: the outline's top's own
+        further 1-σ (px) where the centre is found from it (SolidPrior.top_sigma_px: a sliver's top may be
+        a shoulder's)."""
         x, y = float(centroid_rect[0]), float(centroid_rect[1])
         X_meas = self.rect.rect_to_rig(x, y, disparity)  # eq. (2)
         from_top = None
@@ -178,7 +180,7 @@ class Localizer:
             # height's share, not what is hidden
             v_centroid = extra_px[1] ** 2 + ry**2 + max(s_up**2 - extra_px[1] ** 2, 0.0)
             if from_top is not None:
-                v_top = self.solid.rim_sigma_px**2 + from_top[1] ** 2
+                v_top = self.solid.rim_sigma_px**2 + from_top[1] ** 2 + top_sigma_px**2
                 if top_fused:  # the bottom inferred: both. The outline's shortfall of its stature, lost at
                     # its top or at its bottom alike, moves the top's estimate by 0 or all of it: 1-σ half of it
                     # (pan:body, frames 94-96: the head unseen by eq. (9), 8-15 rows; elevation RMSE 0.226 ->

@@ -229,6 +229,9 @@ class Pipeline:
         fuse = b.bottom_inferred and not terms.hidden_below  # its feet inferred: from its top and its centroid
         top = self._top_px(b) if (terms.hidden_below or fuse) and in_frame else None  # seen over what hides it
         swing, gait = self.headings.shares(track_id, frame.index, self.localizer.origin)
+        solid = self.localizer.solid  # a sliver cut at a side: its top may be a shoulder's
+        top_sigma = 0.0 if top is None or solid is None or terms.seen_whole[0] else \
+            solid.top_sigma_px(float(w), b.disparity, self.rect.b)
         centre = (b.centroid_rect + self.rect.shift_to_rect(b.centroid_raw, terms.rim_shift_px)  # faint bands undone
                   + self._perspective_px(b, (float(w), float(h)), terms))
         loc = self.localizer.locate(centre, b.disparity, max(b.disparity_sigma, terms.disparity_px),
@@ -236,7 +239,7 @@ class Pipeline:
                                     terms.rim_px, in_frame, top, swing, True if terms.known_person else None,
                                     None if top is None else self.extents.stature_m(track_id, self.rect.b, b.disparity),
                                     gait, self.subtractor.left_background(frame.gimbal) is None, fuse,
-                                    self._matched(b, track_id, (float(w), float(h))))
+                                    self._matched(b, track_id, (float(w), float(h))), top_sigma)
         self.headings.add(track_id, frame.index, frame.t, loc.world)
         return loc
 
