@@ -295,6 +295,11 @@ class SolidPrior:
             return behind
         return behind[0], max(behind[1], self.part_depth_sigma_m * disparity / baseline_m)
 
+    def stature_px(self, disparity: float, baseline_m: float) -> float | None:
+        """A person of height_m at disparity `disparity` (px, rectified; baseline_m the rig's baseline, m):
+        H d / b px high. None without a baseline."""
+        return self.height_m * disparity / baseline_m if baseline_m > 0 else None
+
     def top_sigma_px(self, width_px: float, disparity: float, baseline_m: float) -> float:
         """The 1-σ (px) of a person's top where its outline, width_px wide, is cut at a side and narrower than
         a person's shoulders (`shoulder_width` of its stature H at its disparity, px; baseline_m the rig's):
@@ -303,10 +308,10 @@ class SolidPrior:
         about 0.82 of the stature and are about 0.23 of it across). endless:body seed 2, frames 3303-3430: a
         walker standing behind a post, a 9 px sliver of it seen at 12 m, placed from its top 0.63-0.73 deg
         low with an elevation 1-σ of 0.134 deg. 0 where not so narrow."""
-        if baseline_m <= 0:
+        stature = self.stature_px(disparity, baseline_m)
+        if stature is None or width_px >= self.shoulder_width * stature:
             return 0.0
-        stature = self.height_m * disparity / baseline_m
-        return 0.5 * self.shoulder_drop * stature if width_px < self.shoulder_width * stature else 0.0
+        return 0.5 * self.shoulder_drop * stature
 
     def short_of_stature_px(self, height_px: float, disparity: float, baseline_m: float,
                             stature_m: float | None = None) -> float:
@@ -327,10 +332,8 @@ class SolidPrior:
         the height's against the stature H; the width's against a person's girth (upright_girth H) where the
         outline is narrower than any side of a person (`thinnest` H: a sliver beside what hides the rest).
         None for an axis not so."""
-        if baseline_m <= 0:
-            return None, None
-        stature = self.height_m * disparity / baseline_m
-        if height_px >= self.part_share * stature:
+        stature = self.stature_px(disparity, baseline_m)
+        if stature is None or height_px >= self.part_share * stature:
             return None, None
         fragment = width_px < self.thinnest * stature or height_px < self.part_share * stature / 2.0
         x = None if cut[0] or not fragment else max(self.upright_girth * stature - width_px, 0.0) / 12**0.5
@@ -344,10 +347,8 @@ class SolidPrior:
         about it (unseen_rest_px, as for a person's fragment). endless:body with seed 1, frames 846-883: a
         head over a hedge at 25 m, 5-11 px across against H = 40 px, placed 0.8-1.6 deg above the person's
         centre with an elevation 1-sigma of 0.006-0.23 deg."""
-        if baseline_m <= 0:
-            return False
-        limit = self.speck_share * self.height_m * disparity / baseline_m
-        return width_px < limit and height_px < limit
+        stature = self.stature_px(disparity, baseline_m)
+        return stature is not None and max(width_px, height_px) < self.speck_share * stature
 
     def wide(self, width_px: float, height_px: float) -> bool:
         """Whether a target seen width_px wide and height_px high is a wide body (a vehicle side-on)."""
