@@ -1,9 +1,11 @@
 """A region at the image's left edge whose disparity lies past what its search can reach
-(tracker.region_match.RegionMatcher._beyond_reach): the right camera does not see left columns x < d, so
+(tracker.region_match.RegionMatcher._narrow_match): the right camera does not see left columns x < d, so
 the search on the region's last columns stops short of its disparity, and where the right image beside the
 object looks like it a few pixels on (here drawn so: the object's texture, noisy, PERIOD px right of it)
 the search takes a false peak inside its reach. The region's disparity is then not known that frame; where
-the region is wide enough to reach its own disparity, it is found."""
+the region is wide enough to reach its own disparity, it is found. A tracked object's match within 2 px of
+its search's end is kept where a window of its last 4 columns, reaching 4 px further, agrees
+(RegionMatcher._within_reach)."""
 
 from __future__ import annotations
 
@@ -57,12 +59,23 @@ def _pair(right_edge: float) -> tuple[Pipeline, StereoFrame, tuple[int, int, int
 
 
 def test_a_region_whose_disparity_lies_past_the_edge_cut_search_is_not_given_a_false_one() -> None:
-    pipe, frame, box, region = _pair(32.0)
-    strips = pipe.verifier._strips(frame, box, region, None)
-    assert strips is not None and strips.clipped and strips.d_hi < D  # the search cannot reach D
-    near = strips.match(region, None, 0)
-    assert near is not None and abs(near.disparity - (D - PERIOD)) < 1.0  # the false peak it would take
-    assert pipe.verifier._coarse_disparity(frame, box, region, None) is None
+    for right_edge in (30.0, 32.0):  # the last 4 columns peak at the end of their reach, and inside it
+        pipe, frame, box, region = _pair(right_edge)
+        strips = pipe.verifier._strips(frame, box, region, None)
+        assert strips is not None and strips.clipped and strips.d_hi < D  # the search cannot reach D
+        near = strips.match(region, None, 0)
+        assert near is not None and abs(near.disparity - (D - PERIOD)) < 1.0  # the false peak it would take
+        far, _ = pipe.verifier._narrow_match(frame, box, region)
+        assert far is not None and abs(far.disparity - D) < 0.5
+        assert pipe.verifier._coarse_disparity(frame, box, region, None) is None
+
+
+def test_a_tracked_match_near_its_reach_is_kept_where_the_last_columns_agree() -> None:
+    pipe, frame, box, region = _pair(34.0)
+    strips = pipe.verifier._strips(frame, box, region, D)
+    assert strips is not None and strips.clipped and strips.d_hi - 2.0 < D  # within 2 px of the reach
+    fine = pipe.verifier.match_object(frame, box, region, D, 4, tracked=True)
+    assert fine is not None and abs(fine.disparity - D) < 0.2
 
 
 def test_a_region_wide_enough_to_reach_its_disparity_is_matched_there() -> None:

@@ -83,8 +83,26 @@ class RegionMatcher:
                 strips = self._strips(frame, box, part, d0, half)
                 fine = None if strips is None else strips.match(part, d0, radius, tracked)
                 if fine is not None and strips is not None:
-                    return None if strips.clipped and fine.disparity > strips.d_hi - 2.0 else fine
+                    return self._within_reach(frame, box, part, strips, fine)
         return None
+
+    def _within_reach(self, frame: StereoFrame, box: Box, region: BoolA, strips: Strips, fine: RegionMatch
+                      ) -> RegionMatch | None:
+        """A match near the image's left edge whose search the edge cut short (strips.clipped) and whose peak
+        lies within 2 px of that search's end, where the true peak may lie past it: kept where the region's
+        last columns (`_narrow_match`, a search reaching at least 2 px further) peak within 1 px of it, and
+        not within 2 px of their own reach; else None. Their peak is not taken itself: 4 columns are too few
+        to stand alone (occlusion:body with seed 1, frame 174: a car's end left of a post, 16 px, peaked at
+        41.8 px there with a score of 0.88). endless:body with seed 2, frames 1963-1964: a walker stepping
+        in at the left edge (20.6-20.7 px at its centre) matched at 21.3-21.4 px with a reach of 22-23 px,
+        its last columns at 20.6-20.8 px with a reach of 26-27 px; refused for lying within 2 px of the
+        reach, it was lost."""
+        if not strips.clipped or fine.disparity <= strips.d_hi - 2.0:
+            return fine
+        far, reach = self._narrow_match(frame, box, region)
+        if far is None or reach < strips.d_hi + 2 or far.disparity > reach - 2.0:
+            return None
+        return fine if abs(far.disparity - fine.disparity) <= 1.0 else None
 
     def match_part_or_whole(self, frame: StereoFrame, box: Box, part: BoolA | None, whole: BoolA, d0: float | None,
                             radius: int, tracked: bool) -> RegionMatch | None:
@@ -129,25 +147,30 @@ class RegionMatcher:
             coarse = None if strips is None else strips.match(part, None, 0)
             if strips is None or coarse is None:
                 continue
-            return None if strips.clipped and self._beyond_reach(frame, box, part, strips.d_hi) else coarse.disparity
+            if not strips.clipped:
+                return coarse.disparity
+            far, reach = self._narrow_match(frame, box, part)
+            beyond = far is not None and reach > strips.d_hi and far.disparity > strips.d_hi + 1.0
+            return None if beyond else coarse.disparity  # the peak inside the reach may be a false one
         return None
 
-    def _beyond_reach(self, frame: StereoFrame, box: Box, region: BoolA, d_hi: int) -> bool:
-        """Whether a region near the image's left edge, whose search the edge cut short at d_hi (px: the
-        right camera does not see left columns x < d, so a window of the region's right part reaches no
-        further than its own columns less 3), matches best past d_hi on a window of its last _EDGE_COLS
-        columns and all its rows: then the peak the search found inside its reach may be a false one,
-        and the region's disparity is not known this frame. endless:body with seed 2, frames 1959-1973: a
-        walker stepping in at the left edge, 32-44 px of it seen and 21 px of disparity, matched at
-        13.6-15.2 px on its last 8 columns (the search reached 18 px), a range 4.6-5.3 m too far with a
-        1-σ of 0.2-0.4 m. The narrow window reaches only _MIN_COLS - _EDGE_COLS px further, so a region
-        whose disparity lies further still past the first reach is not told from one matched right: as a
-        region comes in at the edge it widens, and its disparity passes through those few pixels first."""
+    def _narrow_match(self, frame: StereoFrame, box: Box, region: BoolA) -> tuple[RegionMatch | None, int]:
+        """A region near the image's left edge, whose search the edge cut short (the right camera does not see
+        left columns x < d, so a window of the region's right part reaches no further than its own columns
+        less 3), matched on a window of its last _EDGE_COLS columns and all its rows, whose search reaches
+        _MIN_COLS - _EDGE_COLS px further: its peak (None: none; within 2 px of that reach, the true peak may
+        lie further still) and the reach (px; 0: no such window). Where it peaks past the first search's
+        reach, the first search's peak may be a false one, and the region's disparity is not known this
+        frame (`_coarse_disparity`). endless:body with seed 2, frames 1959-1973: a walker stepping in at
+        the left edge, 32-44 px of it seen and 21 px of disparity, matched at 13.6-15.2 px on its last 8
+        columns (the search reached 18 px), a range 4.6-5.3 m too far with a 1-σ of 0.2-0.4 m. A region
+        whose disparity lies further still is not told from one matched right: as a region comes in at
+        the edge it widens, and its disparity passes through those few pixels first."""
         narrow = self._strips(frame, box, region, None, (MATCH_HALF[0], 1 << 16), min_cols=_EDGE_COLS)
-        if narrow is None or narrow.d_hi <= d_hi:
-            return False
+        if narrow is None:
+            return None, 0
         far = narrow.match(region, None, 0)
-        return far is not None and far.disparity > d_hi + 1.0
+        return far, narrow.d_hi
 
     def _strips(self, frame: StereoFrame, box: Box, region: BoolA, d_hint: float | None,
                 half: tuple[int, int] = MATCH_HALF, min_cols: int = _MIN_COLS) -> Strips | None:
