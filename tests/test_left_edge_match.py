@@ -71,7 +71,7 @@ def test_a_region_whose_disparity_lies_past_the_edge_cut_search_is_not_given_a_f
 
 
 def test_a_tracked_match_near_its_reach_is_kept_where_the_last_columns_agree() -> None:
-    pipe, frame, box, region = _pair(24.0)
+    pipe, frame, box, region = _pair(34.0)
     strips = pipe.verifier._strips(frame, box, region, D)
     assert strips is not None and strips.clipped and strips.d_hi - 2.0 < D  # within 2 px of the reach
     fine = pipe.verifier.match_object(frame, box, region, D, 4, tracked=True)

@@ -493,21 +493,6 @@ def test_a_person_cut_at_a_side_of_the_image_holds_the_rest_of_its_stature_in_y(
     assert inside == (0.0, pytest.approx(short / math.sqrt(12.0))) and seen == (True, False)
 
 
-def test_a_person_cut_at_a_side_of_the_image_holds_the_rest_of_its_girth_in_x() -> None:
-    # endless:body seed 1, frames 1956-1982: a walker at the right edge, 5-18 px of it seen, 0.7-1.2 deg off
-    # with an azimuth 1-σ of 0.18 deg: the rest of the person lies beyond the edge, up to its girth less what is seen
-    prior = SolidPrior()
-    rest = prior.beyond_edge_px(16.0, 22.0, default_rig().baseline)  # girth 0.5 of 125 px, 16 seen
-    assert rest == pytest.approx((prior.upright_girth * 1.7 * 22.0 / default_rig().baseline - 16.0) / math.sqrt(12.0))
-    assert rest > 13.0
-    assert prior.beyond_edge_px(70.0, 22.0, default_rig().baseline) == 0.0  # wider than a person's girth
-    for x0 in (640 - 16, 0):  # at the right border and at the left
-        cut, whole = _side_cut(x0)
-        assert not whole[0] and cut[0] >= rest - 1e-6
-    inside, _ = _side_cut(300)  # clear of the borders: no such term
-    assert inside[0] == 0.0
-
-
 def test_a_person_seen_in_part_where_no_cut_was_found_may_be_anywhere_about_it() -> None:
     prior = SolidPrior()
     stature = 1.7 * 16.5 / 0.3  # 93.5 px at 16.5 px of disparity, baseline 0.3 m

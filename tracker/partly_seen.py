@@ -33,9 +33,7 @@ def partly_seen(b: Blob, others: list[tuple[Box, BoolA, float]], upright: bool,
     hidden legs stand under what is seen. On the frames such a body is placed from its top (walk,
     foliage, two-targets, endless), that move made the centroid's x term 0.45 to 1.17 px (medians)
     for azimuth errors of 0.15 to 0.27 px (medians); 90 to 98 % of those frames were within 1σ. One cut at
-    a side: y's term holds its shortfall of a person's stature / √12 (endless:body, frames 1546-1548), and
-    where that side is the image's edge, x's term at least its shortfall of a person's girth / √12
-    (SolidPrior.beyond_edge_px).
+    a side: y's term holds its shortfall of a person's stature / √12 (endless:body, frames 1546-1548).
     An upright body under part_share of a person's stature with no cut found on an axis: the rest of the
     person lies anywhere about it (SolidPrior.unseen_rest_px; endless:body with seed 1, frames 2512-2585, a
     walker behind a post seen as a sliver beside it, the map beside it far: azimuth errors of 1.3° against a
@@ -63,8 +61,6 @@ def partly_seen(b: Blob, others: list[tuple[Box, BoolA, float]], upright: bool,
     _, _, w, h = cv2.boundingRect(b.mask.view(np.uint8))  # the outline's extent (px)
     if upright and (left or right) and solid is not None:  # the rest above or below it
         sy = float(np.hypot(sy, solid.short_of_stature_px(float(h), b.disparity, baseline_m) / 12**0.5))
-        if at_side_edge(b, size[0]):  # and beyond the image's edge
-            px = max(px, solid.beyond_edge_px(float(w), b.disparity, baseline_m))
     whole = (not (left or right) and ux == 0.0, not (top or bottom) and uy == 0.0)
     if upright and solid is not None:  # a person seen in part where no cut was found
         rx, ry = solid.unseen_rest_px(float(w), float(h), b.disparity, baseline_m, (not whole[0], not whole[1]))
@@ -72,11 +68,6 @@ def partly_seen(b: Blob, others: list[tuple[Box, BoolA, float]], upright: bool,
         whole = (whole[0] and rx is None, whole[1] and ry is None)
     cut = (float(np.sqrt(px * px + sx * sx + ux * ux)), float(np.sqrt(py * py + sy * sy + uy * uy)))
     return hidden_below, cut, whole
-
-
-def at_side_edge(b: Blob, width: int) -> bool:
-    """Whether the blob's outline reaches the image's left or right edge (width: the image's, px)."""
-    return bool((b.box[0] == 0 and b.mask[:, 0].any()) or (b.box[2] == width and b.mask[:, -1].any()))
 
 
 def legs_aside_px(mask: BoolA, hidden_from: int) -> float:

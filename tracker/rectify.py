@@ -33,12 +33,6 @@ def _pixel_areas(rect: F32) -> F32:
     return np.asarray(np.abs(gx[..., 0] * gy[..., 1] - gx[..., 1] * gy[..., 0]), np.float32)
 
 
-# rectified columns and rows kept past each side of the frame (`Rectifier.wide`): with alpha 0 the rectified
-# frame is cropped to the raw image's inside, and the lens pushes the raw image's edges 10-16 px past it on
-# the simulated rig (raw left column 639 at rectified 650-655)
-RECT_MARGIN_PX = 32
-
-
 @dataclass
 class Rectifier:
     """Rectification maps and rectified coordinates of every raw pixel, for both cameras.
@@ -50,9 +44,7 @@ class Rectifier:
     of each raw left pixel, whose masked sums give an area-weighted rectified centroid (eq. 10);
     ray_moments: (H, W, 3) float64 a (u, v, 1) / (1 + u² + v²)² of each raw left pixel (u, v = (x_rect - cx) / f,
     (y_rect - cy) / f): its unit ray (u, v, 1) / √(1 + u² + v²) weighted by the solid angle it spans, a / f² /
-    (1 + u² + v²)^(3/2), for the direction centroid (`direction_centroid`). wide[k]: maps[k] over the
-    rectified frame grown by `margin` (RECT_MARGIN_PX) px on each side, (H + 2 margin, W + 2 margin): the
-    raw pixels the crop leaves out can still be matched (`map_window`, `columns`).
+    (1 + u² + v²)^(3/2), for the direction centroid (`direction_centroid`).
     """
 
     rig: StereoRig
@@ -67,9 +59,6 @@ class Rectifier:
     area_of_raw: F32 = field(init=False)
     area_moments: NDArray[np.float64] = field(init=False)
     ray_moments: NDArray[np.float64] = field(init=False)
-    margin: int = field(init=False, default=RECT_MARGIN_PX)
-    wide: tuple[tuple[F32, F32], tuple[F32, F32]] = field(init=False)
-    _cols: tuple[tuple[NDArray[np.int64], NDArray[np.int64]], ...] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         L, R = self.rig.left, self.rig.right
@@ -82,7 +71,6 @@ class Rectifier:
         P = np.array([[self.f, 0.0, self.cx], [0.0, self.f, self.cy], [0.0, 0.0, 1.0]])
         maps = []
         rect = []
-        self._wide_maps(P)
         for cam, Rk in ((L, self.R1), (R, self.R2)):
             mx, my = cv2.initUndistortRectifyMap(cam.K, cam.dist, Rk, P, cam.size, cv2.CV_32FC1)
             maps.append((mx, my))
@@ -99,46 +87,13 @@ class Rectifier:
         w = a / (1.0 + u * u + v * v) ** 2
         self.ray_moments = np.dstack([w * u, w * v, w])
 
-    def _wide_maps(self, P: F64) -> None:
-        """`wide` (the maps over the frame grown by `margin` px a side) and, for each of its rows, the first
-        and last rectified column whose raw pixel lies inside camera k's image (`columns`)."""
-        m, wide, cols = self.margin, [], []
-        Pw = P.copy()
-        Pw[0, 2] += m
-        Pw[1, 2] += m
-        for cam, Rk in ((self.rig.left, self.R1), (self.rig.right, self.R2)):
-            w, h = cam.size
-            mx, my = cv2.initUndistortRectifyMap(cam.K, cam.dist, Rk, Pw, (w + 2 * m, h + 2 * m), cv2.CV_32FC1)
-            wide.append((np.asarray(mx, np.float32), np.asarray(my, np.float32)))
-            inside = (mx >= 0.0) & (mx <= w - 1.0) & (my >= 0.0) & (my <= h - 1.0)
-            any_in = inside.any(axis=1)
-            first = np.where(any_in, np.argmax(inside, axis=1), w + 2 * m) - m
-            last = np.where(any_in, w + 2 * m - 1 - np.argmax(inside[:, ::-1], axis=1), -1) - m
-            cols.append((first.astype(np.int64), last.astype(np.int64)))
-        self.wide = (wide[0], wide[1])
-        self._cols = tuple(cols)
-
-    def map_window(self, side: int, box: tuple[int, int, int, int]) -> tuple[F32, F32]:
-        """Camera `side`'s map over the rectified window box = (x0, y0, x1, y1), which may reach `margin` px
-        past the frame on each side: the raw (x, y) sampled for each of its pixels, float32 (y1 - y0, x1 - x0)."""
-        x0, y0, x1, y1 = box
-        m = self.margin
-        mx, my = self.wide[side]
-        if x0 < -m or y0 < -m or x1 > mx.shape[1] - m or y1 > mx.shape[0] - m:
-            raise ValueError(f"rectified window {box} reaches past the {m} px margin")
-        return mx[y0 + m:y1 + m, x0 + m:x1 + m], my[y0 + m:y1 + m, x0 + m:x1 + m]
-
-    def columns(self, side: int, y0: int, y1: int) -> tuple[int, int]:
-        """The first and last rectified column (px, within `margin` of the frame) whose raw pixel lies inside
-        camera `side`'s image on every rectified row y0 <= y < y1."""
-        first, last = self._cols[side]
-        m = self.margin
-        return int(first[y0 + m:y1 + m].max()), int(last[y0 + m:y1 + m].min())
-
     def rectify(self, img: U8, side: int, box: tuple[int, int, int, int] | None = None) -> U8:
         """Rectified image of camera `side` (0 left, 1 right), or only the rectified window
-        box = (x0, y0, x1, y1) of it, which may reach `margin` px past the frame (`map_window`); bilinear."""
-        mx, my = self.maps[side] if box is None else self.map_window(side, box)
+        box = (x0, y0, x1, y1) of it; bilinear."""
+        mx, my = self.maps[side]
+        if box is not None:
+            x0, y0, x1, y1 = box
+            mx, my = mx[y0:y1, x0:x1], my[y0:y1, x0:x1]
         return np.asarray(cv2.remap(img, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE))
 
     def right_at(self, box: tuple[int, int, int, int], d: float) -> tuple[F32, F32]:

@@ -99,7 +99,7 @@ class RegionMatcher:
         reach, it was lost."""
         if not strips.clipped or fine.disparity <= strips.d_hi - 2.0:
             return fine
-        far, reach = self._narrow_match(frame, box, region, fine.disparity)
+        far, reach = self._narrow_match(frame, box, region)
         if far is None or reach < strips.d_hi + 2 or far.disparity > reach - 2.0:
             return None
         return fine if abs(far.disparity - fine.disparity) <= 1.0 else None
@@ -154,21 +154,19 @@ class RegionMatcher:
             return None if beyond else coarse.disparity  # the peak inside the reach may be a false one
         return None
 
-    def _narrow_match(self, frame: StereoFrame, box: Box, region: BoolA, about: float | None = None
-                      ) -> tuple[RegionMatch | None, int]:
+    def _narrow_match(self, frame: StereoFrame, box: Box, region: BoolA) -> tuple[RegionMatch | None, int]:
         """A region near the image's left edge, whose search the edge cut short (the right camera does not see
         left columns x < d, so a window of the region's right part reaches no further than its own columns
         less 3), matched on a window of its last _EDGE_COLS columns and all its rows, whose search reaches
         _MIN_COLS - _EDGE_COLS px further: its peak (None: none; within 2 px of that reach, the true peak may
-        lie further still) and the reach (px; 0: no such window). about: a disparity (px) the search is
-        about (`_strips`), None for the whole range. Where it peaks past the first search's
+        lie further still) and the reach (px; 0: no such window). Where it peaks past the first search's
         reach, the first search's peak may be a false one, and the region's disparity is not known this
         frame (`_coarse_disparity`). endless:body with seed 2, frames 1959-1973: a walker stepping in at
         the left edge, 32-44 px of it seen and 21 px of disparity, matched at 13.6-15.2 px on its last 8
         columns (the search reached 18 px), a range 4.6-5.3 m too far with a 1-σ of 0.2-0.4 m. A region
         whose disparity lies further still is not told from one matched right: as a region comes in at
         the edge it widens, and its disparity passes through those few pixels first."""
-        narrow = self._strips(frame, box, region, about, (MATCH_HALF[0], 1 << 16), min_cols=_EDGE_COLS)
+        narrow = self._strips(frame, box, region, None, (MATCH_HALF[0], 1 << 16), min_cols=_EDGE_COLS)
         if narrow is None:
             return None, 0
         far = narrow.match(region, None, 0)
@@ -198,18 +196,12 @@ class RegionMatcher:
         rx0, rx1 = max(rx0, cx - half[0]), min(rx1, cx + half[0])
         ry0, ry1 = max(ry0, cy - half[1]), min(ry1, cy + half[1])
         d_hi = cfg.max_disparity if d_hint is None else int(np.ceil(d_hint)) + 8
-        # the rectified columns whose raw pixels the right and left images hold on all these rows: up to
-        # Rectifier.margin px past the rectified frame, which alpha 0 crops to the raw image's inside. Left of
-        # the frame only about a disparity (d_hint): a search over the whole range reaching further at the
-        # left edge took a false peak there (endless:body seed 1, frame 3510: a walker stepping in at 5.6 m,
-        # 96 px of it seen by the right camera, matched at 11 px for 32, 9.8 m off)
-        lo_r, hi_l = min(rect.columns(1, ry0, ry1)[0], 0) if d_hint is not None else 0, rect.columns(0, ry0, ry1)[1]
         # near the left edge the search range runs out of image: keep at least min_cols columns of the
         # region (its right part) and search as far as the image allows
-        rx0 = max(rx0, min(d_hi + 3 + lo_r, rx1 - min_cols))
-        clipped = rx0 - 3 - lo_r < d_hi
-        d_hi = min(d_hi, rx0 - 3 - lo_r)
-        rx1 = min(rx1, hi_l - 1)  # at the right edge, match on the part inside the image
+        rx0 = max(rx0, min(d_hi + 3, rx1 - min_cols))
+        clipped = rx0 - 3 < d_hi
+        d_hi = min(d_hi, rx0 - 3)
+        rx1 = min(rx1, w - 2)  # at the right edge, match on the part inside the image
         if d_hi < 3 or rx1 - rx0 < 4 or ry1 <= ry0:
             return None
         sx0 = rx0 - d_hi - 2

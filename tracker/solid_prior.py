@@ -323,17 +323,6 @@ class SolidPrior:
         height = self.height_m if stature_m is None else stature_m
         return max(height * disparity / baseline_m - height_px, 0.0) if baseline_m > 0 else 0.0
 
-    def beyond_edge_px(self, width_px: float, disparity: float, baseline_m: float) -> float:
-        """The centroid's 1-σ (px) along x of an upright outline width_px wide that the image's left or right
-        edge cuts: the rest of the person lies beyond the edge, as wide as anything up to a person's girth
-        (upright_girth of its stature at its disparity, px; baseline_m the rig's) less what is seen, so
-        the centroid of what is seen lies up to half that from the person's: that shortfall / √12.
-        endless:body with seed 1, frames 1956-1982: a walker standing at the right edge at 12 m, 5-18 px of
-        it seen (its girth 42 px), placed 0.7-1.2 deg off with an azimuth 1-σ of 0.18 deg. 0 without a
-        baseline or where the outline is that wide."""
-        stature = self.stature_px(disparity, baseline_m)
-        return 0.0 if stature is None else max(self.upright_girth * stature - width_px, 0.0) / 12**0.5
-
     def unseen_rest_px(self, width_px: float, height_px: float, disparity: float, baseline_m: float,
                        cut: tuple[bool, bool]) -> tuple[float | None, float | None]:
         """What an upright outline width_px x height_px under part_share of a person of height_m at its

@@ -84,9 +84,9 @@ class Strips:
     def _core_and_whole(self, region: BoolA) -> tuple[U8, U8]:
         x0, y0 = self.origin
         rx0, ry0, rx1, ry1 = self.window
-        mx, my = self.rect.map_window(0, (rx0, ry0, rx1, ry1))
-        mmx = mx - np.float32(x0)
-        mmy = my - np.float32(y0)
+        mx, my = self.rect.maps[0]
+        mmx = mx[ry0:ry1, rx0:rx1] - np.float32(x0)
+        mmy = my[ry0:ry1, rx0:rx1] - np.float32(y0)
         wgt = cv2.remap(region.astype(np.float32), mmx, mmy, cv2.INTER_LINEAR,
                         borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
         core = np.asarray(cv2.erode((wgt > 0.99).astype(np.uint8), CORE), np.uint8)
