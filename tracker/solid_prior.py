@@ -291,7 +291,8 @@ class SolidPrior:
         1-σ at least part_depth_sigma_m where its outline, height_px high, is under part_share of a person
         of height_m at its disparity (px; baseline_m the rig's): seen in part (its legs hidden, or only its
         legs seen), the seen width says little of the depth behind what is seen."""
-        if baseline_m <= 0 or height_px >= self.part_share * self.height_m * disparity / baseline_m:
+        stature = self.stature_px(disparity, baseline_m)
+        if stature is None or height_px >= self.part_share * stature:
             return behind
         return behind[0], max(behind[1], self.part_depth_sigma_m * disparity / baseline_m)
 
