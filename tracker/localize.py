@@ -153,7 +153,8 @@ class Localizer:
         if self.solid is not None and extent_px is not None:
             behind = self.solid.behind_face_px(*extent_px, upright=upright, matched=matched)
             if upright:
-                behind = self.solid.seen_in_part(behind, extent_px[1], disparity, self.rect.b)
+                past_edge = top_px is not None and not in_frame  # from its top, its legs past the image's edge
+                behind = self.solid.seen_in_part(behind, extent_px[1], disparity, self.rect.b, past_edge)
                 if in_frame:  # a person's volume centre above its silhouette's
                     y_centroid = y - self.solid.shift_up(swing) * extent_px[1]
                 if top_px is not None:

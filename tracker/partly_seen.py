@@ -21,8 +21,10 @@ def partly_seen(b: Blob, others: list[tuple[Box, BoolA, float]], upright: bool,
                 ring: tuple[BoolA, Box, CorrespondenceMap], size: tuple[int, int], cfg: VisibilityConfig,
                 person: tuple[SolidPrior | None, float], level_from: float | None = None
                 ) -> tuple[bool, tuple[float, float], tuple[bool, bool]]:
-    """Whether a nearer background cuts the blob's bottom and nothing its top, and the centroid's
-    extra 1-σ (px, x and y) where the blob is cut by the image border, by another object found this
+    """Whether a nearer background or the image's bottom edge cuts the blob's bottom and nothing its top (a
+    person near the cameras, its legs past the edge, is then placed from its top: walk:body's walker at 3 m
+    had an elevation 1-σ of 9.7°, the cut's kappa term, for errors of 0.73° rms, 0.39° from its top), and
+    the centroid's extra 1-σ (px, x and y) where the blob is cut by the image border, by another object found this
     frame (others: box, mask, disparity) or by a nearer background (the cameras moving, too: pan:body
     elevation within 1σ 0.54 -> 0.67), with the move across the cut sides; and, in quadrature, the offset
     of the rows down to the ground where the blob's lowest part may be lost against it
@@ -52,7 +54,8 @@ def partly_seen(b: Blob, others: list[tuple[Box, BoolA, float]], upright: bool,
     px, py = cut_sigma_px(b.mask, seen, cfg, tall)
     ux, uy = unseen_below(mask, b.disparity, disp, valid, cfg)
     left, right, top, bottom = seen.sides
-    hidden_below = seen.bottom_by_background and not top
+    # its bottom hidden, by a nearer background or past the image's bottom edge, and nothing its top
+    hidden_below = (seen.bottom_by_background or (bottom and b.box[3] >= size[1])) and not top
     if hidden_below and upright:  # a person's hidden lower part stands under what is seen
         sx = 0.0
     if upright and seen.hidden_from is not None:  # but a leg seen beside an occluder stands to one side

@@ -227,7 +227,8 @@ class Pipeline:
         cy = float(np.hypot(terms.centroid_px[1], ky))
         in_frame = b.box[1] > 0 and b.box[3] < self.rig.left.size[1]  # its box reaches neither top nor bottom
         fuse = b.bottom_inferred and not terms.hidden_below  # its feet inferred: from its top and its centroid
-        top = self._top_px(b) if (terms.hidden_below or fuse) and in_frame else None  # seen over what hides it
+        top_seen = in_frame or (terms.hidden_below and b.box[1] > 0)  # its bottom past the image's edge
+        top = self._top_px(b) if (terms.hidden_below or fuse) and top_seen else None  # seen over what hides it
         swing, gait = self.headings.shares(track_id, frame.index, self.localizer.origin)
         solid = self.localizer.solid  # a sliver cut at a side: its top may be a shoulder's
         top_sigma = 0.0 if top is None or solid is None or terms.seen_whole[0] else \
