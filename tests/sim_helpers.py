@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
 import numpy as np
 import pytest
 
@@ -12,10 +14,10 @@ from tracker.results import Blob, FrameResult
 from tracker.sim.scenarios import SimFrame, SimRig, get_scenario
 
 
-def run_frames(name: str, frames: int, surveyed: bool = False) -> tuple[Pipeline, SimFrame, FrameResult]:
+def each_frame(name: str, frames: int, surveyed: bool = False) -> Iterator[tuple[Pipeline, SimFrame, FrameResult]]:
     """A scenario's first `frames` frames through a pipeline with the scenario's solid prior, its
     background learnt from the empty scene (with `surveyed`, at every pose `tmeye eval` surveys): the
-    pipeline, the last frame and its result."""
+    pipeline, each frame and its result."""
     scenario = get_scenario(name)
     sim = SimRig(scenario)
     pipe = Pipeline(sim.rig, solid=target_prior(scenario))
@@ -23,8 +25,13 @@ def run_frames(name: str, frames: int, surveyed: bool = False) -> tuple[Pipeline
         pipe.learn_background(sim.background(g))
     for _ in range(frames):
         sf = sim.step()
-        res = pipe.step(sf.frame)
-    return pipe, sf, res
+        yield pipe, sf, pipe.step(sf.frame)
+
+
+def run_frames(name: str, frames: int, surveyed: bool = False) -> tuple[Pipeline, SimFrame, FrameResult]:
+    """`each_frame`'s last: the pipeline, the last frame and its result."""
+    *_, last = each_frame(name, frames, surveyed)
+    return last
 
 
 def walker_errors(name: str, frame: int) -> list[float]:

@@ -7,12 +7,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from sim_helpers import run_frames
 
 import tracker.partly_seen as partly_seen
-from tracker.evaluation import _on, target_prior
+from tracker.evaluation import _on
 from tracker.partly_seen import legs_aside_px
-from tracker.pipeline import Pipeline
-from tracker.sim.scenarios import SimRig, get_scenario
 from tracker.visibility import VisibilityConfig, cuts
 
 CFG = VisibilityConfig()
@@ -59,13 +58,7 @@ def test_the_walker_behind_the_crate_on_the_endless_scene(with_term: bool, monke
     # frame 305: the crate hides the walker's legs but for one past its right edge
     if not with_term:
         monkeypatch.setattr(partly_seen, "legs_aside_px", lambda mask, hidden_from: 0.0)
-    scenario = get_scenario("endless:body")
-    sim = SimRig(scenario)
-    pipe = Pipeline(sim.rig, solid=target_prior(scenario))
-    pipe.learn_background(sim.background())
-    for _ in range(306):
-        sf = sim.step()
-        res = pipe.step(sf.frame)
+    _, sf, res = run_frames("endless:body", 306)
     tt = sf.truth.target(1)
     assert tt is not None
     det = next(d for d in res.detections if _on(d, tt, sf.truth.ids_left))

@@ -8,11 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from sim_helpers import each_frame
 
-from tracker.evaluation import _on, target_prior
+from tracker.evaluation import _on
 from tracker.localize import spherical
-from tracker.pipeline import Pipeline
-from tracker.sim.scenarios import SimRig, get_scenario
 from tracker.solid_prior import SolidPrior
 
 
@@ -30,14 +29,8 @@ def test_a_person_past_the_edge_has_a_depth_1_sigma_of_its_own() -> None:
 
 
 def test_the_walker_at_three_metres_cut_by_the_image_bottom() -> None:
-    scenario = get_scenario("walk:body")
-    sim = SimRig(scenario)
-    pipe = Pipeline(sim.rig, solid=target_prior(scenario))
-    pipe.learn_background(sim.background())
     zs, sigmas_phi, sigmas_r = [], [], []
-    for i in range(16):
-        sf = sim.step()
-        res = pipe.step(sf.frame)
+    for i, (_, sf, res) in enumerate(each_frame("walk:body", 16)):
         tt = sf.truth.target(1)
         assert tt is not None
         det = next(d for d in res.detections if _on(d, tt, sf.truth.ids_left))
