@@ -54,8 +54,7 @@ def partly_seen(b: Blob, others: list[tuple[Box, BoolA, float]], upright: bool,
     px, py = cut_sigma_px(b.mask, seen, cfg, tall)
     ux, uy = unseen_below(mask, b.disparity, disp, valid, cfg)
     left, right, top, bottom = seen.sides
-    # its bottom hidden, by a nearer background or past the image's bottom edge, and nothing its top
-    hidden_below = (seen.bottom_by_background or (bottom and b.box[3] >= size[1])) and not top
+    hidden_below = bottom and not top  # by a nearer background or past the image's bottom edge (`cuts`' sides)
     if hidden_below and upright:  # a person's hidden lower part stands under what is seen
         sx = 0.0
     if upright and seen.hidden_from is not None:  # but a leg seen beside an occluder stands to one side
