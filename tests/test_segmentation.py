@@ -168,6 +168,23 @@ def test_extent_history_counts_a_strip_the_outline_took_in_beyond_the_target() -
     assert sx == pytest.approx(0.5 / np.sqrt(6.0))
 
 
+def test_extent_history_counts_a_strip_lost_where_no_cut_was_found() -> None:
+    # endless:body seed 1, frames 2770-2772: a head over a hedge, 12-13 px wide by its history, drawn 7 px
+    # wide with no cut found (eq. (9) lost a side against a background like it): x had no term at all
+    hist = ExtentHistory()
+    for _ in range(5):  # a board 30 px across at 15 px of disparity, seen whole
+        assert hist.bounded_sigma_px(1, (30.0, 30.0), 900.0, 15.0, (0.0, 0.0)) == (0.0, 0.0)
+    # a pixel narrower is the outline's rounding (within the slack): still nothing
+    assert hist.bounded_sigma_px(1, (29.0, 30.0), 870.0, 15.0, (0.0, 0.0)) == (0.0, 0.0)
+    # 10 px narrower, no side seen cut: a strip lost at a side not known, the centroid 5 px off either way
+    sx, sy = hist.bounded_sigma_px(1, (20.0, 30.0), 600.0, 15.0, (0.0, 0.0))
+    assert sx == pytest.approx(5.0) and sy == 0.0
+    # not kept as the target's width: the next frame seen whole at 30 px is bounded as before
+    assert hist.bounded_sigma_px(1, (30.0, 30.0), 900.0, 15.0, (0.0, 0.0)) == (0.0, 0.0)
+    # a walker's outline narrows with its stride (`varies`): its shape, which its own term holds
+    assert hist.bounded_sigma_px(1, (20.0, 30.0), 600.0, 15.0, (0.0, 0.0), varies=True) == (0.0, 0.0)
+
+
 def test_extent_history_widens_by_how_much_the_whole_target_varied() -> None:
     # a robust scale (1.4826 x the median absolute deviation): one frame that took in a strip (a merge,
     # kept as whole) does not widen the bound for the next 15 frames, as a standard deviation did

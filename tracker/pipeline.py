@@ -221,8 +221,10 @@ class Pipeline:
                                           lambda: self._sigma_terms(frame, b, blobs, track_id))
         _, _, w, h = cv2.boundingRect(b.mask.view(np.uint8))
         jump = self.heights.sigma_px(track_id, frame.index, float(h), b.disparity)
+        solid = self.localizer.solid  # a person's outline narrows with its stride: its shape, not a strip lost
+        varies = solid is not None and self.extents.seen_upright(track_id, solid.upright_aspect)
         kx, ky = self.extents.cut_sigma_px(track_id, (float(w), float(h)), float(b.area), b.disparity, terms.cut_px,
-                                           terms.seen_whole, outer_runs(b.mask))
+                                           terms.seen_whole, outer_runs(b.mask), varies)
         cx = with_gap_x(float(np.hypot(terms.centroid_px[0], kx)), terms.gap_x_px, self.localizer.solid, w, h)
         cy = float(np.hypot(terms.centroid_px[1], ky))
         in_frame = b.box[1] > 0 and b.box[3] < self.rig.left.size[1]  # its box reaches neither top nor bottom
@@ -230,7 +232,6 @@ class Pipeline:
         top_seen = in_frame or (terms.hidden_below and b.box[1] > 0)  # its bottom past the image's edge
         top = self._top_px(b) if (terms.hidden_below or fuse) and top_seen else None  # seen over what hides it
         swing, gait = self.headings.shares(track_id, frame.index, self.localizer.origin)
-        solid = self.localizer.solid  # a sliver cut at a side: its top may be a shoulder's
         top_sigma = 0.0 if top is None or solid is None or terms.seen_whole[0] else \
             solid.top_sigma_px(float(w), b.disparity, self.rect.b)
         centre = (b.centroid_rect + self.rect.shift_to_rect(b.centroid_raw, terms.rim_shift_px)  # faint bands undone
