@@ -181,8 +181,15 @@ def test_extent_history_counts_a_strip_lost_where_no_cut_was_found() -> None:
     assert sx == pytest.approx(5.0) and sy == 0.0
     # not kept as the target's width: the next frame seen whole at 30 px is bounded as before
     assert hist.bounded_sigma_px(1, (30.0, 30.0), 900.0, 15.0, (0.0, 0.0)) == (0.0, 0.0)
-    # a walker's outline narrows with its stride (`varies`): its shape, which its own term holds
-    assert hist.bounded_sigma_px(1, (20.0, 30.0), 600.0, 15.0, (0.0, 0.0), varies=True) == (0.0, 0.0)
+    # a board's history is not upright: where a person is expected, a strip lost all the same
+    sx, _ = hist.bounded_sigma_px(1, (20.0, 30.0), 600.0, 15.0, (0.0, 0.0), upright_aspect=2.0)
+    assert sx == pytest.approx(5.0)
+    # a walker's outline (history 10 x 30 px) narrows with its stride: its shape, which its own term holds
+    for _ in range(5):
+        hist.bounded_sigma_px(2, (10.0, 30.0), 300.0, 15.0, (0.0, 0.0))
+    assert hist.bounded_sigma_px(2, (6.0, 30.0), 180.0, 15.0, (0.0, 0.0), upright_aspect=2.0) == (0.0, 0.0)
+    sx, _ = hist.bounded_sigma_px(2, (6.0, 30.0), 180.0, 15.0, (0.0, 0.0))  # no person expected: a strip lost
+    assert sx == pytest.approx(2.0)
 
 
 def test_extent_history_widens_by_how_much_the_whole_target_varied() -> None:

@@ -222,9 +222,9 @@ class Pipeline:
         _, _, w, h = cv2.boundingRect(b.mask.view(np.uint8))
         jump = self.heights.sigma_px(track_id, frame.index, float(h), b.disparity)
         solid = self.localizer.solid  # a person's outline narrows with its stride: its shape, not a strip lost
-        varies = solid is not None and self.extents.seen_upright(track_id, solid.upright_aspect)
         kx, ky = self.extents.cut_sigma_px(track_id, (float(w), float(h)), float(b.area), b.disparity, terms.cut_px,
-                                           terms.seen_whole, outer_runs(b.mask), varies)
+                                           terms.seen_whole, outer_runs(b.mask),
+                                           None if solid is None else solid.upright_aspect)
         cx = with_gap_x(float(np.hypot(terms.centroid_px[0], kx)), terms.gap_x_px, self.localizer.solid, w, h)
         cy = float(np.hypot(terms.centroid_px[1], ky))
         in_frame = b.box[1] > 0 and b.box[3] < self.rig.left.size[1]  # its box reaches neither top nor bottom

@@ -257,14 +257,16 @@ class ExtentHistory:
 
     def cut_sigma_px(self, track_id: int, extent_px: tuple[float, float], area_px: float, disparity: float,
                      cut_px: tuple[float, float], seen_whole: tuple[bool, bool] = (True, True),
-                     edge_px: tuple[float, float] | None = None, varies: bool = False) -> tuple[float, float]:
+                     edge_px: tuple[float, float] | None = None, upright_aspect: float | None = None
+                     ) -> tuple[float, float]:
         """`bounded_sigma_px`, at least `fade` times what the track's last sighting was given: the cut is
         not found in every frame (endless:body with seed 2, frames 1988-1991: a walker going behind a crate
         had an x term of 20.7, 2.9, 0.07 and 7.1 px; at 1990 its azimuth 1-σ was 0.016° for an error of
         0.50°), and what was hidden comes back into view over frames, not at once. fade 0.35 against 0.5:
         `eval --all` seed 0 kept its 120 lines met (118 with 0.5: two 1-σ lines one frame over their band's
         top as what was hidden came back), endless:body's azimuth NEES 1.40 -> 1.31 (1.28)."""
-        got = self.bounded_sigma_px(track_id, extent_px, area_px, disparity, cut_px, seen_whole, edge_px, varies)
+        got = self.bounded_sigma_px(track_id, extent_px, area_px, disparity, cut_px, seen_whole, edge_px,
+                                    upright_aspect)
         last = self._last.get(track_id, (0.0, 0.0))
         out = (max(got[0], self.fade * last[0]), max(got[1], self.fade * last[1]))
         self._last[track_id] = out
@@ -272,7 +274,7 @@ class ExtentHistory:
 
     def bounded_sigma_px(self, track_id: int, extent_px: tuple[float, float], area_px: float, disparity: float,
                          cut_px: tuple[float, float], seen_whole: tuple[bool, bool] = (True, True),
-                         edge_px: tuple[float, float] | None = None, varies: bool = False
+                         edge_px: tuple[float, float] | None = None, upright_aspect: float | None = None
                          ) -> tuple[float, float]:
         """The cut sides' 1-σ (px, x and y) for a track's outline of extent_px (width, height, px) and
         area_px (px²) at disparity d (px), given kappa's (cut_px; (0, 0): seen whole) and whether its
@@ -280,9 +282,11 @@ class ExtentHistory:
         (`outer_runs`), for how far the history's scatter moves the centroid (None: a rectangle's, half of
         it): what varies from frame to frame is the outline's outermost part (a board's rounded side, a
         walker's limb reaching out), whose area is the scatter times that run. A strip hidden for sure
-        (`off`) counts at half its width whatever the shape. varies: the target's own outline narrows from
-        frame to frame (a person's, its stride and its arms: tracker.pipeline, a track seen upright), so an
-        axis seen whole and short of the history is its shape, not a strip lost (`_lost_unseen`)."""
+        (`off`) counts at half its width whatever the shape. upright_aspect: a SolidPrior's
+        (None: no person expected); a track whose history stands at least that many times as high as wide
+        (`seen_upright`, from the same medians) is a person, whose outline narrows from frame to frame with
+        its stride and its arms, so an axis seen whole and short of the history is its shape, not a strip
+        lost (`_lost_unseen`)."""
         if disparity <= 0 or area_px <= 0:
             return cut_px
         kept = self._kept.setdefault(track_id, ([], [], []))
@@ -296,8 +300,7 @@ class ExtentHistory:
                 del kept[a][:-self.frames]
         expected = [now[a] if st is None else st[0] for a, st in enumerate(stats[:2])]
         short = [max(e - n, 0.0) for e, n in zip(expected, now[:2], strict=True)]
-        if not varies:
-            cut_px = self._lost_unseen(cut_px, seen_whole, short, stats)
+        cut_px = self._lost_unseen(cut_px, seen_whole, short, stats, upright_aspect)
         if cut_px == (0.0, 0.0):  # nothing cut: nothing to bound
             return cut_px
         strips = short[0] * expected[1] + short[1] * expected[0]  # the area the extents' shortfalls hide
@@ -319,7 +322,8 @@ class ExtentHistory:
         return out[0], out[1]
 
     def _lost_unseen(self, cut_px: tuple[float, float], seen_whole: tuple[bool, bool], short: list[float],
-                     stats: list[tuple[float, float] | None]) -> tuple[float, float]:
+                     stats: list[tuple[float, float] | None], upright_aspect: float | None
+                     ) -> tuple[float, float]:
         """kappa's terms (cut_px), unbounded (inf, for `bounded_sigma_px` to bound) along an axis where no cut
         was found (seen whole, no term) but the extent falls short of the history's by more than the slack
         and `lost_share` of it: a strip lost at a side not known, eq. (9) and the temporal model missing it
@@ -328,15 +332,19 @@ class ExtentHistory:
         its x term 0 (no cut), its azimuth 1-σ 0.006-0.029° for errors of 0.18-0.23° (z -34 to -6: a fifth
         of the scenario's azimuth NEES). lost_share: a ball at 2 m is drawn 2-3 % narrower than its
         history's w / d says, seen whole (approach:body seed 0, frames 286-299: with the slack alone its
-        azimuth 1-σ went 0.017 -> 0.58° for errors of 0.05°). Not for a walker (`varies`): a stride's
-        narrowing took walk:body's azimuth within 1σ 0.72 -> 0.80 (seed 0), its upright term
-        (tracker.solid_prior) already holding it."""
+        azimuth 1-σ went 0.017 -> 0.58° for errors of 0.05°). Not for a walker (its history upright by
+        upright_aspect, as `seen_upright` tells from the same medians): a stride's narrowing took walk:body's
+        azimuth within 1σ 0.72 -> 0.80 (seed 0), its upright term (tracker.solid_prior) already holding it."""
         out = list(cut_px)
         for a in range(2):
             st = stats[a]
             if out[a] == 0.0 and seen_whole[a] and st is not None and \
                     short[a] > max(self._slack(st[1], a), self.lost_share * st[0]):
                 out[a] = math.inf
+        w, h = stats[0], stats[1]
+        if out != list(cut_px) and upright_aspect is not None and w is not None and h is not None and \
+                h[0] >= upright_aspect * w[0]:  # a person: its stride, not a strip lost
+            return cut_px
         return out[0], out[1]
 
     def seen_upright(self, track_id: int, aspect: float) -> bool:
