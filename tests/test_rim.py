@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tracker.rim import Pictures, RimConfig, along_rows, recover_rim, recover_rim_keys
+from tracker.rim import Pictures, RimConfig, _cost, along_rows, recover_rim, recover_rim_keys
 
 H, W = 90, 120
 D_OBJ, D_BG = 12, 4  # px: the object's disparity and the background's
@@ -137,6 +137,17 @@ def test_the_object_cost_is_the_least_over_its_pictures() -> None:
     assert np.count_nonzero(one & limb) > 0 and np.array_equal(both, one)
     none = recover_rim(obj, _pictures(left, [other], r_bg, temporal), np.ones_like(disc), RimConfig())
     assert np.array_equal(none, obj)
+
+
+def test_a_window_past_the_pictures_edge_sums_what_lies_inside() -> None:
+    """A pixel at the pictures' edge that a picture matches exactly (difference 0) beside pixels it does not
+    (10 grey levels): its best 3x3 window holds its own column and the next, 30 grey levels, not the next
+    column twice (OpenCV's mirrored border: 60, as much as the window one column in). Inside, every window
+    is whole (90); at the other edge, two columns of it lie inside (60)."""
+    diff = np.full((7, 9), 10, np.uint8)
+    diff[:, 0] = 0
+    cost = _cost(diff, (3, 3))
+    assert cost[3, 0] == 30 and cost[3, 4] == 90 and cost[3, 8] == 60
 
 
 def _moving_scene(seed: int = 0, wall_amp: float = 18.0):  # type: ignore[no-untyped-def]
