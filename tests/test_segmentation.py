@@ -7,7 +7,8 @@ import statistics
 import numpy as np
 import pytest
 
-from tracker.segmentation import ExtentHistory, HeightHistory, edge_quantisation_px, hull_gap_px, outline_sigma_px
+from tracker.extent_history import ExtentHistory
+from tracker.segmentation import HeightHistory, edge_quantisation_px, hull_gap_px, outline_sigma_px
 
 
 def _centroid(m: np.ndarray) -> np.ndarray:
@@ -190,6 +191,35 @@ def test_extent_history_counts_a_strip_lost_where_no_cut_was_found() -> None:
     assert hist.bounded_sigma_px(2, (6.0, 30.0), 180.0, 15.0, (0.0, 0.0), upright_aspect=2.0) == (0.0, 0.0)
     sx, _ = hist.bounded_sigma_px(2, (6.0, 30.0), 180.0, 15.0, (0.0, 0.0))  # no person expected: a strip lost
     assert sx == pytest.approx(2.0)
+
+
+def test_extent_history_of_a_persons_fragment_bounds_no_cut() -> None:
+    # endless:body seed 1, frames 2546-2595: a track born on a 16 px wide sliver of a walker beside a post
+    person = (36.0, 14.0)  # SolidPrior.fragment_px where a person stands 60 px high: 0.6 and 0.23 of that
+    hist = ExtentHistory()
+    for _ in range(5):  # the sliver, 16 x 26 px, seen whole at 15 px of disparity
+        hist.bounded_sigma_px(1, (16.0, 26.0), 416.0, 15.0, (0.0, 0.0))
+    kappa = (6.4, 0.0)  # cut at the post now, 4 px of it hidden
+    sliver = hist.bounded_sigma_px(1, (12.0, 26.0), 312.0, 15.0, kappa, (False, True))
+    assert sliver[0] == pytest.approx(0.5 * np.sqrt(16.0 + 1.0 / 6.0))  # no person expected: bounded
+    # a person expected: upright (over 1.5) and under 36 px high, a fragment's history, kappa's term stands
+    assert hist.bounded_sigma_px(1, (12.0, 26.0), 312.0, 15.0, kappa, (False, True), None, 1.5, person) == kappa
+    # the same history where a person stands 40 px high is a whole person's: it still bounds the cut
+    whole = (24.0, 9.2)
+    assert hist.bounded_sigma_px(1, (12.0, 26.0), 312.0, 15.0, kappa, (False, True), None, 1.5, whole) == sliver
+    # its height never seen whole (cut throughout), its width kept: narrower than a person's shoulders
+    cut = ExtentHistory()
+    for _ in range(5):
+        cut.bounded_sigma_px(1, (12.0, 26.0), 312.0, 15.0, (0.0, 9.0), (True, False))
+    assert cut.bounded_sigma_px(1, (8.0, 26.0), 208.0, 15.0, (4.0, 9.0), (False, False), None, 1.5, person) \
+        == (4.0, 9.0)
+    assert cut.bounded_sigma_px(1, (8.0, 26.0), 208.0, 15.0, (4.0, 9.0), (False, False), None, 1.5, whole)[0] < 4.0
+    # a ball's history (round, not upright) still bounds it where a person is expected
+    ball = ExtentHistory()
+    for _ in range(5):
+        ball.bounded_sigma_px(1, (20.0, 20.0), 314.0, 15.0, (0.0, 0.0))
+    sx, _ = ball.bounded_sigma_px(1, (16.0, 20.0), 251.0, 15.0, (6.4, 0.0), (False, True), None, 1.5, person)
+    assert sx < 6.4
 
 
 def test_extent_history_widens_by_how_much_the_whole_target_varied() -> None:

@@ -200,6 +200,14 @@ def test_an_outline_short_of_a_persons_stature_at_its_disparity_says_by_how_much
     assert prior.short_of_stature_px(46.0, 22.0, 0.0) == 0.0
 
 
+def test_a_persons_fragment_is_under_part_of_its_stature_high_or_under_its_shoulders_wide() -> None:
+    # a person 1.7 m tall at 22 px of disparity on a 0.3 m baseline stands 124.7 px high
+    prior = SolidPrior(height_m=1.7)
+    part, shoulders = prior.fragment_px(22.0, 0.3) or (0.0, 0.0)
+    assert part == pytest.approx(0.6 * 1.7 * 22.0 / 0.3) and shoulders == pytest.approx(0.23 * 1.7 * 22.0 / 0.3)
+    assert prior.fragment_px(22.0, 0.0) is None  # no baseline: no stature
+
+
 def test_a_person_seen_in_part_is_as_uncertain_as_its_depth_behind_what_is_seen() -> None:
     # an outline under part_share of a person's height at its disparity (its legs hidden): the centre's depth
     # behind the seen face has a 1-σ of at least part_depth_sigma_m (px at the face's depth: m d / b); seen

@@ -21,6 +21,7 @@ from tracker.bglearn import LearntBackground, Sighting, StreamLearnConfig, Strea
 from tracker.detect import Box, DetectorConfig, StereoSubtractor
 from tracker.disparity_sigma import PartSpread, blob_sigma, on_surface
 from tracker.egomotion import PoseCompensation
+from tracker.extent_history import ExtentHistory
 from tracker.frames import StereoFrame
 from tracker.geometry import StereoRig
 from tracker.heading import HeadingHistory
@@ -42,7 +43,7 @@ from tracker.rim_contrast import (
 )
 from tracker.round_face import matched_factor
 from tracker.schedule import SigmaSchedule, SigmaTerms, VerifySchedule
-from tracker.segmentation import ExtentHistory, HeightHistory, outer_runs, outline_sigma_px
+from tracker.segmentation import HeightHistory, outer_runs, outline_sigma_px
 from tracker.solid_prior import SolidPrior
 from tracker.split import join_occluded, join_parts
 from tracker.strips import whole_outline
@@ -224,7 +225,8 @@ class Pipeline:
         solid = self.localizer.solid  # a person's outline narrows with its stride: its shape, not a strip lost
         kx, ky = self.extents.cut_sigma_px(track_id, (float(w), float(h)), float(b.area), b.disparity, terms.cut_px,
                                            terms.seen_whole, outer_runs(b.mask),
-                                           None if solid is None else solid.upright_aspect)
+                                           None if solid is None else solid.upright_aspect,
+                                           None if solid is None else solid.fragment_px(b.disparity, self.rect.b))
         cx = with_gap_x(float(np.hypot(terms.centroid_px[0], kx)), terms.gap_x_px, self.localizer.solid, w, h)
         cy = float(np.hypot(terms.centroid_px[1], ky))
         in_frame = b.box[1] > 0 and b.box[3] < self.rig.left.size[1]  # its box reaches neither top nor bottom

@@ -205,9 +205,9 @@ class SigmaTerms:
     top, tracker.localize.Localizer.locate); cut_px, what may be hidden where the target is seen in part (px, x and y:
     the cut sides' kappa term, tracker.visibility.cut_sigma_px, the centroid's move across them and the rows lost
     against the ground, in quadrature), apart from centroid_px: the track's extents seen whole bound it at the frame the
-    terms are used for (tracker.segmentation.ExtentHistory); seen_whole, whether its width and its height were seen
+    terms are used for (tracker.extent_history.ExtentHistory); seen_whole, whether its width and its height were seen
     whole (no side along that axis cut, nothing lost against the ground along y); known_person, a track seen whole as an
-    upright body whose lower part a nearer background hides now (tracker.segmentation.ExtentHistory.seen_upright): a
+    upright body whose lower part a nearer background hides now (tracker.extent_history.ExtentHistory.seen_upright): a
     person whatever its top's outline says (tracker.localize.Localizer.locate's upright); rim_shift_px, how far (px, x
     and y) the true silhouette's centroid lies from the outline's where a curved rim's faint sides lost a band
     (tracker.rim_contrast.rim_shift_px), added to the centroid that is located."""

@@ -214,7 +214,7 @@ class SolidPrior:
     where the learnt background cuts an upright walker's bottom and not its top (endless 846, foliage 109,
     walk 39), the centre so found lay 1.63, 1.59 and 0.84 px rms from the truth's image; the silhouette's
     centroid 10.7, 4.0 and 4.8 px. A track that saw the person whole measured its stature (tracker.
-    segmentation.ExtentHistory.stature_m: 1.67 m median on the simulator's 1.69 m walkers, the outline
+    extent_history.ExtentHistory.stature_m: 1.67 m median on the simulator's 1.69 m walkers, the outline
     missing a sliver), which weighs in with the prior's, inverse-variance weighted, its 1-σ widened by
     `stature_sigma_m` (shoes, hair, a sole lost against the ground: the outline's height is not the
     body's): elevation NEES on those frames' scenes foliage 0.50 -> 0.77, endless within 1σ 0.85 -> 0.75,
@@ -318,6 +318,15 @@ class SolidPrior:
         """A person of height_m at disparity `disparity` (px, rectified; baseline_m the rig's baseline, m):
         H d / b px high. None without a baseline."""
         return self.height_m * disparity / baseline_m if baseline_m > 0 else None
+
+    def fragment_px(self, disparity: float, baseline_m: float) -> tuple[float, float] | None:
+        """The extents (px) under which a track's outline seen whole at disparity `disparity` (px, rectified;
+        baseline_m the rig's) is a person's fragment, not a whole body: (part_share H, shoulder_width H) of
+        its stature H there, the height of an upright outline and the width of one whose height was never
+        seen whole (narrower than a person's shoulders: a sliver beside what hides the rest). None without a
+        baseline."""
+        stature = self.stature_px(disparity, baseline_m)
+        return None if stature is None else (self.part_share * stature, self.shoulder_width * stature)
 
     def top_sigma_px(self, width_px: float, disparity: float, baseline_m: float) -> float:
         """The 1-σ (px) of a person's top where its outline, width_px wide, is cut at a side and narrower than
