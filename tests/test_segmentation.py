@@ -195,7 +195,7 @@ def test_extent_history_counts_a_strip_lost_where_no_cut_was_found() -> None:
 
 def test_extent_history_of_a_persons_fragment_bounds_no_cut() -> None:
     # endless:body seed 1, frames 2546-2595: a track born on a 16 px wide sliver of a walker beside a post
-    person = (36.0, 14.0)  # SolidPrior.fragment_px where a person stands 60 px high: 0.6 and 0.23 of that
+    person = (36.0, 13.8)  # SolidPrior.fragment_px where a person stands 60 px high: 0.6 and 0.23 of that
     hist = ExtentHistory()
     for _ in range(5):  # the sliver, 16 x 26 px, seen whole at 15 px of disparity
         hist.bounded_sigma_px(1, (16.0, 26.0), 416.0, 15.0, (0.0, 0.0))

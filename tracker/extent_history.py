@@ -39,16 +39,16 @@ class ExtentHistory:
     robust scale (`_stats`) scaled by d, d²: a walker's width changes with its stride), at least the
     extents' rounding where an end along that axis is cut (each end of the outline rounds by up to half a
     pixel, evenly: 1/√6 px rms; a board's kept extents scatter by that rounding alone, which is not counted
-    twice). Along an axis seen whole (both ends seen, kappa's term there only the centroid's move across a
-    cut side) that rounding is the outline's edge term's (`edge_quantisation_px`), not counted again. That 1-σ,
-    never more than kappa's, stands for kappa's along an axis with a history. two-targets:plate, frames
-    102-180: a disc beside a nearer crosser, seen whole, had kappa x its 31 px width, 12.4 px, along x and
-    y, and a move across its cut top of 9.9 px along x, where its centroid was off by under 0.01 px; on
-    occlusion:plate a board coming in past the image's left edge and then behind posts, its height seen
-    whole throughout, had up to 12.5 px along y for errors of 0.01 px. A frame whose extent or area falls
-    short of the history's by more than twice its scatter and the rounding is not kept (a board sinking
-    behind a hedge, the cut not found in every frame); the history is kept while the track lives (a long
-    cut must not wear it out), and used from `min_frames` frames.
+    twice). Along an axis seen whole (both ends seen, kappa's term there only the centroid's move across a cut
+    side) that rounding is the outline's edge term's (tracker.segmentation.edge_quantisation_px), not counted
+    again. That 1-σ, never more than kappa's, stands for kappa's along an axis with a history.
+    two-targets:plate, frames 102-180: a disc beside a nearer crosser, seen whole, had kappa x its 31 px
+    width, 12.4 px, along x and y, and a move across its cut top of 9.9 px along x, where its centroid was off
+    by under 0.01 px; on occlusion:plate a board coming in past the image's left edge and then behind posts,
+    its height seen whole throughout, had up to 12.5 px along y for errors of 0.01 px. A frame whose extent or
+    area falls short of the history's by more than twice its scatter and the rounding is not kept (a board
+    sinking behind a hedge, the cut not found in every frame); the history is kept while the track lives (a
+    long cut must not wear it out), and used from `min_frames` frames.
 
     An extent that exceeds the history's by more than twice its scatter and the rounding says the outline
     took in a strip that is not the target's (a ghost, a neighbour's part), on a side not known: the
@@ -92,14 +92,14 @@ class ExtentHistory:
         """The cut sides' 1-σ (px, x and y) for a track's outline of extent_px (width, height, px) and
         area_px (px²) at disparity d (px), given kappa's (cut_px; (0, 0): seen whole) and whether its
         width and height were seen whole (kept for later frames). edge_px: the outline's outermost runs
-        (`outer_runs`), for how far the history's scatter moves the centroid (None: a rectangle's, half of
-        it): what varies from frame to frame is the outline's outermost part (a board's rounded side, a
-        walker's limb reaching out), whose area is the scatter times that run. A strip hidden for sure
-        (`off`) counts at half its width whatever the shape. upright_aspect: a SolidPrior's
-        (None: no person expected); a track whose history stands at least that many times as high as wide
+        (tracker.segmentation.outer_runs), for how far the history's scatter moves the centroid (None: a
+        rectangle's, half of it): what varies from frame to frame is the outline's outermost part (a board's
+        rounded side, a walker's limb reaching out), whose area is the scatter times that run. A strip hidden
+        for sure (`off`) counts at half its width whatever the shape. upright_aspect: a SolidPrior's (None: no
+        person expected); a track whose history stands at least that many times as high as wide
         (`seen_upright`, from the same medians) is a person, whose outline narrows from frame to frame with
-        its stride and its arms, so an axis seen whole and short of the history is its shape, not a strip
-        lost (`_lost_unseen`). fragment_px: the height and the width (px) under which a person's outline at
+        its stride and its arms, so an axis seen whole and short of the history is its shape, not a strip lost
+        (`_lost_unseen`). fragment_px: the height and the width (px) under which a person's outline at
         this disparity is a fragment (SolidPrior.fragment_px; None: no person expected): a history of a
         fragment bounds nothing (`_fragment`)."""
         if disparity <= 0 or area_px <= 0:
@@ -168,11 +168,12 @@ class ExtentHistory:
         """Whether the history's medians (stats, px at this disparity) are a person's fragment's, not the
         whole target's (fragment_px: SolidPrior.fragment_px, the height and width under which they are;
         None: no person expected): upright (at least upright_aspect times as high as wide) and short of the
-        height, or, its height never seen whole, narrower than the width. What a cut hides is not known
-        from them. endless:body with seed 1, frames 2546-2595: a track born on a 16 px wide sliver of a
-        walker beside a post (a person's shoulders 21 px there), its height never seen whole, had its x
-        1-σ bounded by the sliver's width to 0.017° (z up to 99) once a closing as in an empty plane let
-        the sliver through."""
+        height, or, its height never seen whole, narrower than the width. What a cut hides is not known from
+        them, nor a strip lost where no cut was found from its narrowing (a person's piece narrows with its
+        stride as the whole does: `_lost_unseen`'s rule for an upright history). endless:body with seed 1,
+        frames 2546-2595: a track born on a 16 px wide sliver of a walker beside a post (a person's shoulders
+        21 px there), its height never seen whole, had its x 1-σ bounded by the sliver's width to 0.017° (z up
+        to 99) once a closing as in an empty plane let the sliver through."""
         w, h = stats[0], stats[1]
         if upright_aspect is None or fragment_px is None or w is None:
             return False
