@@ -296,3 +296,29 @@ def test_the_seen_surface_of_a_face_square_to_the_lens_lies_on_its_silhouettes_r
     assert _angle(mean - c, ray - c) < 1e-6
     raw = (view.rays[y0:y1, x0:x1].reshape(-1, 3) * window[1].reshape(-1, 1)).mean(axis=0)
     assert _angle(raw, ray - c) > np.radians(0.02)
+
+
+def test_people_are_drawn_with_peoples_statures_and_built_to_them() -> None:
+    from tracker.sim.bodies import PERSON_STATURE_M, draw_stature
+
+    rng = np.random.default_rng(5)
+    drawn = np.array([draw_stature(rng) for _ in range(4000)])
+    assert drawn.mean() == pytest.approx(1.695, abs=0.01) and drawn.std() == pytest.approx(0.095, abs=0.01)
+    assert drawn.min() >= 1.45 and drawn.max() <= 1.98
+
+    def still(t: float) -> np.ndarray:
+        return np.array([0.0, 0.0, 6.0])
+
+    tex = body_texture(np.random.default_rng(1), "person")
+    for stature in (1.55, PERSON_STATURE_M, 1.90):
+        parts = BodyObject(1, "person", still, tex, stature_m=stature).parts(0.0)
+        top = min(float(q.centre[1] - q.half[0]) if q.kind == "sphere" else float(q.corners()[:, 1].min())
+                  for q in parts)
+        feet = max(float(q.corners()[:, 1].max()) for q in parts)
+        assert feet == pytest.approx(CAMERA_HEIGHT_M, abs=0.03)  # on the ground whatever its height
+        assert CAMERA_HEIGHT_M - top == pytest.approx(stature)  # its head's top the stature above the ground
+    with pytest.raises(ValueError, match="stature must lie in 0.5-2.5 m, got 3.0"):
+        BodyObject(1, "person", still, tex, stature_m=3.0)
+    statures = {SimRig(get_scenario(f"{name}:body"), seed=0).objects[0].stature_m  # type: ignore[union-attr]
+                for name in ("walk", "foliage", "pan")}
+    assert len(statures) == 3  # each scene its own person

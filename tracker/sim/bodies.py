@@ -3,8 +3,9 @@
 Opt-in: the scenario `NAME:body` (tracker.sim.scenarios.get_scenario) draws its targets as bodies instead
 of flat plates. Kinds (`BodyObject.kind`):
 - "sphere": a ball of radius 0.3 m on the scenario's path, spinning slowly about the vertical;
-- "person": torso and limbs as boxes, head a sphere, 1.69 m tall, standing on the ground under the path,
-  facing where it walks (facing the gimbal base when it stands), legs and arms swinging as it walks;
+- "person": torso and limbs as boxes, head a sphere, `stature_m` tall (PERSON_STATURE_M, 1.69 m, unless the
+  scenario draws one: `draw_stature`), standing on the ground under the path, facing where it walks (facing
+  the gimbal base when it stands), legs and arms swinging as it walks;
 - "vehicle": a car of two boxes (body 1.8 x 0.8 x 4.2 m, 0.25 m above the ground; cabin), driving along
   the path with its length forward.
 
@@ -40,6 +41,7 @@ AMBIENT = 0.45
 SUN = np.array([-0.5, -0.75, -0.45]) / np.linalg.norm([-0.5, -0.75, -0.45])  # towards the sun: up, left, behind
 TEXEL_M = 0.01
 SPHERE_R_M = 0.3
+PERSON_STATURE_M = 1.69  # the person of _person_parts at scale 1: soles to the top of its head
 KINDS = ("sphere", "person", "vehicle")
 _SIGNS = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], float)  # (8, 3)
 
@@ -222,14 +224,22 @@ class Body:
         return np.asarray(out, np.float64).reshape(-1)
 
 
-def _person_parts(base: F64, R: F64, phase: float) -> list[Part]:
+def draw_stature(rng: np.random.Generator) -> float:
+    """A person's stature (m): a woman's 1.63 or a man's 1.76 m, alike likely, each ± 0.07 m (1-σ, adults'
+    spread within a sex), clipped to 1.45-1.98 m; the mixture is 1.695 ± 0.095 m."""
+    mean = 1.63 if rng.random() < 0.5 else 1.76
+    return float(np.clip(rng.normal(mean, 0.07), 1.45, 1.98))
+
+
+def _person_parts(base: F64, R: F64, phase: float, scale: float = 1.0) -> list[Part]:
     """A person standing at `base` (its ground point, world (3,)) turned by R (body -> world): local
-    x right, y down, z forward, heights negative. phase (rad): the walking cycle (0: standing)."""
+    x right, y down, z forward, heights negative. phase (rad): the walking cycle (0: standing). scale:
+    every length times it (PERSON_STATURE_M tall at 1)."""
     swing = 0.4 * np.sin(phase)
 
     def part(kind: str, at: tuple[float, float, float], half: tuple[float, float, float], Rl: F64,
              tex: float) -> Part:
-        return Part(kind, base + R @ np.array(at), R @ Rl, np.array(half), tex)
+        return Part(kind, base + scale * (R @ np.array(at)), R @ Rl, scale * np.array(half), tex)
 
     def limb(pivot: tuple[float, float, float], length: float, half_xz: float, a: float, tex: float) -> Part:
         Rl = rot_x(a)
@@ -275,17 +285,21 @@ class BodyObject:
     path: Trajectory
     texture: U8
     visible: Callable[[float], bool] = _always
+    stature_m: float = PERSON_STATURE_M  # a person's height (m); other kinds ignore it
     _tex32: F32 = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
             raise ValueError(f"unknown body kind {self.kind!r}; known: {', '.join(KINDS)}")
+        if not 0.5 <= self.stature_m <= 2.5:
+            raise ValueError(f"a person's stature must lie in 0.5-2.5 m, got {self.stature_m}")
         self._tex32 = self.texture.astype(np.float32)
 
     @property
     def area_m2(self) -> float:
         """About the silhouette's area (m²) seen side on."""
-        return {"sphere": float(np.pi * SPHERE_R_M**2), "person": 0.6, "vehicle": 7.0}[self.kind]
+        person = 0.6 * (self.stature_m / PERSON_STATURE_M) ** 2
+        return {"sphere": float(np.pi * SPHERE_R_M**2), "person": person, "vehicle": 7.0}[self.kind]
 
     def parts(self, t: float) -> list[Part]:
         p = self.path(t)
@@ -297,7 +311,8 @@ class BodyObject:
         base = np.array([p[0], CAMERA_HEIGHT_M, p[2]])
         if self.kind == "vehicle":
             return _vehicle_parts(base, rot_y(float(yaw)))
-        return _person_parts(base, rot_y(float(yaw)), 2.0 * np.pi * t / 1.1 if moving else 0.0)
+        return _person_parts(base, rot_y(float(yaw)), 2.0 * np.pi * t / 1.1 if moving else 0.0,
+                             self.stature_m / PERSON_STATURE_M)
 
     def trajectory(self, t: float) -> F64:
         """The truth: the parts' volume centroid Σ V_i c_i / Σ V_i (world m, (3,))."""

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import zlib
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
@@ -12,7 +13,7 @@ from numpy.typing import NDArray
 from tracker.closedloop_path import MANOEUVRE
 from tracker.frames import GimbalState, StereoFrame
 from tracker.geometry import StereoRig, gimbal_rotation
-from tracker.sim.bodies import BodyObject, body_texture
+from tracker.sim.bodies import PERSON_STATURE_M, BodyObject, body_texture, draw_stature
 from tracker.sim.endless import EndlessScene
 from tracker.sim.render import FrameTruth, SimRenderer, TargetTruth
 from tracker.sim.rig import default_rig
@@ -247,6 +248,8 @@ class SimRig:
             self.objects = [MovingObject(tid, path, PERSON_HALF_W_M, person_texture(rng, 90, 215), half_h_m=0.85)
                             for tid, path in scenario.paths]
         self._body_rng = np.random.default_rng(seed + 31337)  # not `rng`: the plates' draws stay as they are
+        # people's statures: drawn apart from the textures, and per scene (each scene its own people)
+        self._stature_rng = np.random.default_rng([seed, 7127, zlib.crc32(scenario.name.split(":")[0].encode())])
         self._bodies: dict[int, tuple[MovingObject, BodyObject]] = {}  # endless: its objects as bodies
         if scenario.bodies:
             self.objects = [self._as_body(o) for o in self.objects]
@@ -299,9 +302,11 @@ class SimRig:
         kind = "person" if obj.half_h_m is not None else kinds[0] if obj.target_id == 1 else kinds[-1]
         if self.scenario.script is not None and obj.half_h_m is None:
             kind = "sphere"
-        body = BodyObject(obj.target_id, kind, obj.trajectory, body_texture(self._body_rng, kind), obj.visible)
-        if len(self._bodies) > 64:
-            self._bodies.clear()
+        stature = draw_stature(self._stature_rng) if kind == "person" else PERSON_STATURE_M
+        body = BodyObject(obj.target_id, kind, obj.trajectory, body_texture(self._body_rng, kind), obj.visible,
+                          stature)
+        if len(self._bodies) > 64:  # forget the oldest: those present now keep their texture and stature
+            del self._bodies[next(iter(self._bodies))]
         self._bodies[id(obj)] = (obj, body)
         return body
 
