@@ -363,8 +363,8 @@ class SolidPrior:
         stature = self.stature_px(disparity, baseline_m)
         if stature is None or height_px >= self.part_share * stature:
             return None, None
-        fragment = width_px < self.thinnest * stature or height_px < self.part_share * stature / 2.0
-        x = None if cut[0] or not fragment else max(self.upright_girth * stature - width_px, 0.0) / 12**0.5
+        thin_or_low = width_px < self.thinnest * stature or height_px < self.part_share * stature / 2.0
+        x = None if cut[0] or not thin_or_low else max(self.upright_girth * stature - width_px, 0.0) / 12**0.5
         return x, None if cut[1] else (stature - height_px) / 12**0.5
 
     def speck(self, width_px: float, height_px: float, disparity: float, baseline_m: float) -> bool:
@@ -372,9 +372,9 @@ class SolidPrior:
         its disparity (px; baseline_m the rig's) along both axes, 0.51 m for H = 1.70 m. No whole body this
         prior is for is seen that small (the simulator's ball, the smallest, is 0.35 H; a person's girth
         0.5 H, a car's height 0.8 H): it is a piece of one whose rest is hidden or lost, and may lie anywhere
-        about it (unseen_rest_px, as for a person's fragment). endless:body with seed 1, frames 846-883: a
-        head over a hedge at 25 m, 5-11 px across against H = 40 px, placed 0.8-1.6 deg above the person's
-        centre with an elevation 1-sigma of 0.006-0.23 deg."""
+        about it (unseen_rest_px, as for a thin or low piece of a person). endless:body with seed 1, frames
+        846-883: a head over a hedge at 25 m, 5-11 px across against H = 40 px, placed 0.8-1.6 deg above the
+        person's centre with an elevation 1-sigma of 0.006-0.23 deg."""
         stature = self.stature_px(disparity, baseline_m)
         return stature is not None and max(width_px, height_px) < self.speck_share * stature
 
