@@ -191,6 +191,10 @@ def test_extent_history_counts_a_strip_lost_where_no_cut_was_found() -> None:
     assert hist.bounded_sigma_px(2, (6.0, 30.0), 180.0, 15.0, (0.0, 0.0), upright_aspect=2.0) == (0.0, 0.0)
     sx, _ = hist.bounded_sigma_px(2, (6.0, 30.0), 180.0, 15.0, (0.0, 0.0))  # no person expected: a strip lost
     assert sx == pytest.approx(2.0)
+    # its height does not change with its stride: 12 px shorter is a strip lost at its top or bottom
+    # (endless:body seed 2, frames 1768-1775: a head and shoulders over a hedge not found below it)
+    sx, sy = hist.bounded_sigma_px(2, (10.0, 18.0), 180.0, 15.0, (0.0, 0.0), upright_aspect=2.0)
+    assert sx == 0.0 and sy == pytest.approx(6.0)
 
 
 def test_extent_history_of_a_persons_fragment_bounds_no_cut() -> None:
