@@ -1,5 +1,6 @@
-"""Shared test fixtures: the path of ../shared/data (tests skip with a reason when it is absent), and one
-headless chromium per browser-test module (Debian's, driven by Playwright; skipped with a reason without it)."""
+"""Shared test fixtures: the path of ../shared/data (tests skip with a reason when it is absent), one
+headless chromium per browser-test module (Debian's, driven by Playwright; skipped with a reason without it),
+and the simulator's people at the one stature the situation tests were written around."""
 
 from __future__ import annotations
 
@@ -18,6 +19,19 @@ def shared_data() -> Path:
     if not SHARED_DATA.is_dir():
         pytest.skip(f"shared test data not found at {SHARED_DATA} (clone with ../shared beside the repo)")
     return SHARED_DATA
+
+
+@pytest.fixture(autouse=True)
+def people_as_written(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every simulated person PERSON_STATURE_M (1.69 m) tall, as every one was when the tests that name a
+    scene's frames (a walker's legs before a wall at frame 1320, ...) were written: the situations they
+    reproduce are that person's. `tmeye eval` draws people's statures (tracker.sim.bodies.draw_stature);
+    a test marked `drawn_statures` gets them too."""
+    if request.node.get_closest_marker("drawn_statures") is None:
+        import tracker.sim.scenarios as scenarios
+        from tracker.sim.bodies import PERSON_STATURE_M
+
+        monkeypatch.setattr(scenarios, "draw_stature", lambda rng: PERSON_STATURE_M)
 
 
 @pytest.fixture(scope="module")

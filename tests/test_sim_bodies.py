@@ -298,6 +298,7 @@ def test_the_seen_surface_of_a_face_square_to_the_lens_lies_on_its_silhouettes_r
     assert _angle(raw, ray - c) > np.radians(0.02)
 
 
+@pytest.mark.drawn_statures
 def test_people_are_drawn_with_peoples_statures_and_built_to_them() -> None:
     from tracker.sim.bodies import PERSON_STATURE_M, draw_stature
 
