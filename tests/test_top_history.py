@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from tracker.frames import GimbalState
+from tracker.geometry import gimbal_rotation
 from tracker.rectify import Rectifier
 from tracker.sim.rig import default_rig
 from tracker.top_history import TopHistory, top_world_y_m
@@ -42,3 +43,17 @@ def test_top_world_height_does_not_change_as_the_mount_pans() -> None:
     assert y1 == pytest.approx(y0, abs=1e-9)
     assert top_world_y_m(rect, None, 320.0, 200.0, 12.0) == pytest.approx(y0)
     assert top_world_y_m(rect, GimbalState(), 320.0, 180.0, 12.0) < y0  # higher in the image: higher up (y down)
+    # tilted by 10°, the same world point is seen elsewhere in the image and has the same world y
+    X_w = gimbal_rotation(0.0, 0.0) @ rect.rect_to_rig(320.0, 200.0, 12.0)
+    tilted = GimbalState(tilt_deg=10.0)
+    x, y, d = rect.rig_to_rect((gimbal_rotation(0.0, 10.0).T @ X_w)[None, :])
+    assert abs(float(y[0]) - 200.0) > 20.0
+    assert top_world_y_m(rect, tilted, float(x[0]), float(y[0]), float(d[0])) == pytest.approx(float(X_w[1]), abs=1e-9)
+
+
+def test_a_top_without_depth_is_neither_judged_nor_kept() -> None:
+    tops = TopHistory()
+    for _ in range(5):
+        tops.offset_px(1, -0.2, 10.0, 0.3)
+    assert tops.offset_px(1, float("inf"), 10.0, 0.3) == 0.0 and tops.offset_px(1, 0.3, 0.0, 0.3) == 0.0
+    assert tops.offset_px(1, 0.1, 10.0, 0.3) > 9.0  # the history still the head's

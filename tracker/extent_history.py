@@ -98,10 +98,10 @@ class ExtentHistory:
         for sure (`off`) counts at half its width whatever the shape. upright_aspect: a SolidPrior's (None: no
         person expected); a track whose history stands at least that many times as high as wide
         (`seen_upright`, from the same medians) is a person, whose outline narrows from frame to frame with
-        its stride and its arms, so an axis seen whole and short of the history is its shape, not a strip lost
-        (`_lost_unseen`). fragment_px: the height and the width (px) under which a person's outline at
-        this disparity is a fragment (SolidPrior.fragment_px; None: no person expected): a history of a
-        fragment bounds nothing (`_fragment`)."""
+        its stride and its arms, so its width seen whole and short of the history is its shape, not a strip
+        lost (`_lost_unseen`; its height short of it is one). fragment_px: the height and the width (px)
+        under which a person's outline at this disparity is a fragment (SolidPrior.fragment_px; None: no
+        person expected): a history of a fragment bounds nothing (`_fragment`)."""
         if disparity <= 0 or area_px <= 0:
             return cut_px
         kept = self._kept.setdefault(track_id, ([], [], []))

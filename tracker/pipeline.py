@@ -238,7 +238,7 @@ class Pipeline:
         swing, gait = self.headings.shares(track_id, frame.index, self.localizer.origin)
         top_sigma = 0.0 if top is None or solid is None or terms.seen_whole[0] else \
             solid.top_sigma_px(float(w), b.disparity, self.rect.b)
-        if b.box[1] > 0:  # its top seen: a piece lost or gained there moves a centre found from it halfway
+        if b.box[1] > 0:  # its top seen: a piece lost there moves a centre found from it halfway up
             y_top = top_world_y_m(self.rect, frame.gimbal, float(b.centroid_rect[0]), self._top_px(b), b.disparity)
             off = self.tops.offset_px(track_id, y_top, b.disparity, self.rect.b)
             if top is not None and off != 0.0:

@@ -16,10 +16,16 @@ difference (either is then within 1σ), and the frame is not kept. A top higher 
 and moves nothing: a track is often born on a person whose head is not yet in its outline (endless:body
 with seed 0, track 6: its first six tops 0.24 m low; judged both ways, where it was placed from its top in
 frames 1978-2289 it was moved about 5 px too high, elevation error +0.16 -> -0.28°, 1-σ 0.13 -> 0.45°).
+
+The history is the last `frames` tops kept, however old: nothing ages it. A person who crouches or sits,
+or a track handed to a shorter person, stays judged against its old tops for the rest of the track: its
+top taken halfway with a 1-σ of half the drop, wider than it needs but holding the error. A history is
+kept for every track whose top is seen (a ball's, a car's too); only a person placed from its top uses it.
 """
 
 from __future__ import annotations
 
+import math
 import statistics
 
 import numpy as np
@@ -40,8 +46,8 @@ def top_world_y_m(rect: Rectifier, gimbal: GimbalState | None, x_px: float, top_
 
 
 class TopHistory:
-    """Per track, the world heights (y, m) of its outline's top over its last `frames` frames whose top
-    was not found moved (see the module's docstring); used from `min_frames`."""
+    """Per track, the world heights (y, m) of its outline's last `frames` tops not found lowered (see the
+    module's docstring); used from `min_frames`."""
 
     def __init__(self, frames: int = 15, min_frames: int = 3, round_px: float = 1.0):
         self.frames = frames
@@ -53,10 +59,12 @@ class TopHistory:
         """How far (px at this disparity, + down) the track's top at world y_m (m) lies below its history's
         median, 0 within twice the history's scatter and round_px or above it; a top not found lower is
         kept. A world height Y at disparity d spans Y d / b px (f Y / Z, Z = f b / d)."""
+        if disparity <= 0 or baseline_m <= 0 or not math.isfinite(y_m):  # no depth: nothing judged or kept
+            return 0.0
         kept = self._kept.setdefault(track_id, [])
-        px_per_m = disparity / baseline_m if disparity > 0 and baseline_m > 0 else 0.0
+        px_per_m = disparity / baseline_m
         off = 0.0
-        if len(kept) >= self.min_frames and px_per_m > 0:
+        if len(kept) >= self.min_frames:
             med = statistics.median(kept)  # a few µs on 15 floats, unlike np.median
             spread = 1.4826 * statistics.median([abs(v - med) for v in kept])
             diff = (y_m - med) * px_per_m

@@ -295,8 +295,9 @@ class SimRig:
         its last (an endless scene's people stay people, its plates become spheres); kept per object."""
         if isinstance(obj, BodyObject):
             return obj
-        known = self._bodies.get(id(obj))
+        known = self._bodies.pop(id(obj), None)
         if known is not None and known[0] is obj:
+            self._bodies[id(obj)] = known  # the most recently used last: the oldest is forgotten first
             return known[1]
         kinds = self.scenario.body_kinds
         kind = "person" if obj.half_h_m is not None else kinds[0] if obj.target_id == 1 else kinds[-1]
@@ -305,7 +306,7 @@ class SimRig:
         stature = draw_stature(self._stature_rng) if kind == "person" else PERSON_STATURE_M
         body = BodyObject(obj.target_id, kind, obj.trajectory, body_texture(self._body_rng, kind), obj.visible,
                           stature)
-        if len(self._bodies) > 64:  # forget the oldest: those present now keep their texture and stature
+        if len(self._bodies) > 64:  # forget the least recently used: those present keep texture and stature
             del self._bodies[next(iter(self._bodies))]
         self._bodies[id(obj)] = (obj, body)
         return body
