@@ -48,6 +48,7 @@ from tracker.solid_prior import SolidPrior
 from tracker.split import join_occluded, join_parts
 from tracker.strips import whole_outline
 from tracker.temporal import TemporalConfig, TemporalDetector, without_duplicates
+from tracker.top_history import TopHistory, top_world_y_m
 from tracker.tracks import MultiTracker, TrackerConfig
 from tracker.verify import Verifier
 from tracker.visibility import (
@@ -94,6 +95,7 @@ class Pipeline:
         self.heights = HeightHistory()
         self.extents = ExtentHistory()
         self.headings = HeadingHistory()
+        self.tops = TopHistory()
         self.spread = PartSpread()  # each track's parts' spread: a person's disparity 1-σ's prior
         self.visibility, self.outline, self.rim_contrast = VisibilityConfig(), OutlineConfig(), RimContrastConfig()
         self._last_gain = 1.0
@@ -176,7 +178,7 @@ class Pipeline:
         # from centroids and disparities alone (not their σ), as seen at home: the mount's turning taken out
         sigma_d, alone = np.array([b.disparity_sigma for b in blobs]), np.array([b.one_camera for b in blobs], bool)
         ids = self.tracker.update(frame.t, self.ego.to_home(obs, frame.gimbal), sigma_d, alone)
-        for kept in (self.sigma_schedule, self.heights, self.extents, self.headings, self.spread):
+        for kept in (self.sigma_schedule, self.heights, self.extents, self.headings, self.tops, self.spread):
             kept.keep_only([tr.track_id for tr in self.tracker.tracks])
         for blob, i in zip(blobs, ids, strict=True):
             self.spread.add(i, blob.parts, blob.disparity)
@@ -236,6 +238,11 @@ class Pipeline:
         swing, gait = self.headings.shares(track_id, frame.index, self.localizer.origin)
         top_sigma = 0.0 if top is None or solid is None or terms.seen_whole[0] else \
             solid.top_sigma_px(float(w), b.disparity, self.rect.b)
+        if b.box[1] > 0:  # its top seen: a piece lost there moves a centre found from it halfway up
+            y_top = top_world_y_m(self.rect, frame.gimbal, float(b.centroid_rect[0]), self._top_px(b), b.disparity)
+            off = self.tops.offset_px(track_id, y_top, b.disparity, self.rect.b)
+            if top is not None and off != 0.0:
+                top, top_sigma = top - off / 2.0, float(np.hypot(top_sigma, off / 2.0))
         centre = (b.centroid_rect + self.rect.shift_to_rect(b.centroid_raw, terms.rim_shift_px)  # faint bands undone
                   + self._perspective_px(b, (float(w), float(h)), terms))
         loc = self.localizer.locate(centre, b.disparity, max(b.disparity_sigma, terms.disparity_px),
