@@ -22,16 +22,22 @@ def shared_data() -> Path:
 
 
 @pytest.fixture(autouse=True)
-def people_as_written(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> None:
+def people_as_written(request: pytest.FixtureRequest) -> Iterator[None]:
     """Every simulated person PERSON_STATURE_M (1.69 m) tall, as every one was when the tests that name a
     scene's frames (a walker's legs before a wall at frame 1320, ...) were written: the situations they
     reproduce are that person's. `tmeye eval` draws people's statures (tracker.sim.bodies.draw_stature),
-    and so do the `tmeye` processes tests start; a test marked `drawn_statures` gets them too."""
-    if request.node.get_closest_marker("drawn_statures") is None:
-        import tracker.sim.scenarios as scenarios
-        from tracker.sim.bodies import PERSON_STATURE_M
+    and so do the `tmeye` processes tests start; a test marked `drawn_statures` gets them too. Its own
+    MonkeyPatch: a test's `monkeypatch.undo()` (tests/test_growth.py's `_outline` calls it between two
+    runs) must not undo it."""
+    if request.node.get_closest_marker("drawn_statures") is not None:
+        yield
+        return
+    import tracker.sim.scenarios as scenarios
+    from tracker.sim.bodies import PERSON_STATURE_M
 
-        monkeypatch.setattr(scenarios, "draw_stature", lambda rng: PERSON_STATURE_M)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(scenarios, "draw_stature", lambda rng: PERSON_STATURE_M)
+        yield
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,4 @@
-"""A track's outline's top over its frames, in the world, to tell a piece lost or gained there (issue 12 item 1).
+"""A track's outline's top over its frames, in the world, to tell a piece lost there (issue 12 item 1).
 
 Where a nearer background hides a person's lower part, its centre is found from its outline's top
 (tracker.localize.Localizer._below_top): c H below it. That top is the head's only while the head is in
