@@ -28,14 +28,9 @@ from __future__ import annotations
 import math
 import statistics
 
-import numpy as np
-from numpy.typing import NDArray
-
 from tracker.frames import GimbalState
 from tracker.geometry import gimbal_rotation
 from tracker.rectify import Rectifier
-
-F64 = NDArray[np.float64]
 
 
 def top_world_y_m(rect: Rectifier, gimbal: GimbalState | None, x_px: float, top_px: float, disparity: float) -> float:
