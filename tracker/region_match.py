@@ -142,16 +142,17 @@ class RegionMatcher:
         tracked one may (match_object): then its top, middle and bottom thirds are searched in turn."""
         if d0 is not None:
             return d0
-        for part in row_thirds(region):
-            strips = self._strips(frame, box, part, None)
-            coarse = None if strips is None else strips.match(part, None, 0)
-            if strips is None or coarse is None:
-                continue
-            if not strips.clipped:
-                return coarse.disparity
-            far, reach = self._narrow_match(frame, box, part)
-            beyond = far is not None and reach > strips.d_hi and far.disparity > strips.d_hi + 1.0
-            return None if beyond else coarse.disparity  # the peak inside the reach may be a false one
+        for half in (MATCH_HALF, _MATCH_HALF_SLANT):
+            for part in row_thirds(region):
+                strips = self._strips(frame, box, part, None, half)
+                coarse = None if strips is None else strips.match(part, None, 0)
+                if strips is None or coarse is None:
+                    continue
+                if not strips.clipped:
+                    return coarse.disparity
+                far, reach = self._narrow_match(frame, box, part)
+                beyond = far is not None and reach > strips.d_hi and far.disparity > strips.d_hi + 1.0
+                return None if beyond else coarse.disparity  # the peak inside the reach may be a false one
         return None
 
     def _narrow_match(self, frame: StereoFrame, box: Box, region: BoolA) -> tuple[RegionMatch | None, int]:
