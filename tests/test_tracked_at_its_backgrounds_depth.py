@@ -1,5 +1,5 @@
 """A tracked object at its background's depth, not behind it and seen changed by the temporal model, is kept
-rather than refused as a misregistered background patch (tracker.verify.Verifier._changed_at_depth)."""
+rather than refused as a misregistered background patch (tracker.regions.changed_at_depth)."""
 
 from __future__ import annotations
 
@@ -7,12 +7,13 @@ import numpy as np
 import pytest
 from sim_helpers import walker_errors
 
+import tracker.regions as regions
 import tracker.temporal as temporal
 import tracker.verify as verify
 
 
 def test_an_object_at_its_backgrounds_depth_is_kept_when_tracked_changed_and_not_behind() -> None:
-    keep = verify.Verifier._changed_at_depth
+    keep = regions.changed_at_depth
     obj = np.zeros((20, 20), bool)
     obj[5:15, 5:15] = True  # 100 px
     changed = np.zeros_like(obj)
@@ -32,7 +33,7 @@ def test_a_walker_before_a_wall_at_its_own_depth_keeps_its_tracked_outline(monke
     # there is 3.6 px off: both are taken away
     got = walker_errors("endless:body", 1327)
     assert len(got) == 1 and got[0] < 8.0
-    monkeypatch.setattr(verify.Verifier, "_changed_at_depth", lambda self, *a: False)
+    monkeypatch.setattr(verify, "changed_at_depth", lambda *a: False)
     monkeypatch.setattr(temporal.TemporalDetector, "_grown", lambda self, frame, box, b, model, changed: b)
     got = walker_errors("endless:body", 1327)
     assert len(got) == 1 and got[0] > 11.0

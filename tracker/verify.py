@@ -42,6 +42,7 @@ from tracker.regions import (
     background_disparity,
     beyond_occluder_hints,
     border_hints,
+    changed_at_depth,
     hints_around,
     in_front,
     mask_centroid,
@@ -289,28 +290,12 @@ class Verifier(RegionMatcher):
             far = self._seen_through(cm, obj, fine.disparity, min(d_bg, behind), d_hint, around)
             if far is not None and in_front(fine.disparity, far, gap, gap_px):
                 d_bg = far
-            elif not self._changed_at_depth(d_hint is not None, (obj, changed), fine.disparity - min(d_bg, behind)):
+            elif not changed_at_depth(d_hint is not None, (obj, changed), fine.disparity - min(d_bg, behind)):
                 return None  # not in front of the background: a misregistered background patch
         # eq. (10) in rectified coordinates, pixels weighted by their area: Σ a x / Σ a, Σ a y / Σ a
         sx, sy, sa, _ = cv2.mean(self.rect.area_moments[y0:y1, x0:x1], mask=m8)
         return Blob(box, obj, area, c_raw, np.array([sx / sa, sy / sa]), fine.disparity, fine.sigma, d_bg,
                     fine.score, gain, bottom_inferred=inferred), changed
-
-    @staticmethod
-    def _changed_at_depth(tracked: bool, masks: tuple[BoolA, BoolA | None], ahead: float) -> bool:
-        """Whether an object not in front of its background by the depth-gap test is a tracked object at its
-        background's depth rather than a misregistered background patch (`tracked`: verified at its track's
-        prediction; the changed pixels None: no temporal model, the cameras moving): not behind the background
-        (`ahead`, its disparity less the map's behind it, >= 0) and at least half of its outline changed in the
-        temporal model (masks: the outline, the changed pixels). endless:body frame 1327: a walker before the
-        low wall at its own depth, matched at 20.74 px before a map of 19.60 px; refused, the temporal stage's
-        outline of 1,420 px stood in, 13.5 px from the truth's centroid. Behind its background by as little as
-        0.08-0.41 px, the place a walker stood while the first frame was learnt as the background (`eval
-        --startup`, first-frame) was taken so at frames 286-287, a false target."""
-        obj, changed = masks
-        if not tracked or changed is None or ahead < 0.0:
-            return False
-        return int(np.count_nonzero(obj & changed)) >= 0.5 * int(np.count_nonzero(obj))
 
     def _seen_through(self, cm: CorrespondenceMap, obj: BoolA, d: float, d_bg: float, d_hint: float | None,
                       around: list[float]) -> float | None:
