@@ -1,9 +1,9 @@
 """A new person near the cameras whose whole outline matches nowhere at one disparity (its limbs and slanted
-faces lie centimetres to decimetres apart, several pixels at 3 m), and whose coarse disparity the union of both
-keys' regions, its ghost in them, put 5 px behind it: found from its first frame, its outline searched anew over
-the whole range and, where the larger windows match nowhere, on windows half as wide
+faces lie centimetres to decimetres apart, several pixels at 3 m), and whose coarse disparity its left-key
+region, its occlusion shadow in it, put 5 px behind it: found from its first frame, its outline searched anew
+over the whole range and, where the larger windows match nowhere, on windows half as wide
 (RegionMatcher._coarse_disparity, Verifier._verify_region). walk:body with seed 0 draws a walker of 1.693 m:
-frames 0 and 1 were lost, the keys' union at 57.6 px for a walker at 62.7 px."""
+frames 0 and 1 were lost, its left-key region at 57.6 px for a walker at 62.7 px."""
 
 from __future__ import annotations
 

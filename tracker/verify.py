@@ -241,10 +241,11 @@ class Verifier(RegionMatcher):
         found: the objects found before in the box (they stay out of the outline's gain). rest: the box's
         other left-key pixels, where a head past the neck's gap may lie (_outline_stereo). anew: no track is
         predicted in the region, about it, at its border or beyond an occluder: where the outline the temporal
-        model drew does not match about the coarse disparity of both keys' regions (its ghost in them), the
-        outline is searched anew over the whole range (walk:body seed 0, frames 0-1: a walker at 3 m, 62.7 px,
-        its keys' union at 57.6 px). A track's disparity, where there is one, is tried after instead
-        (occlusion:plate seed 1, frame 89: 47 px of a plate at the left edge peaked 0.5 px off anew)."""
+        model drew does not match about the coarse disparity of the left-key region (the object and its
+        occlusion shadow), the outline is searched anew over the whole range (walk:body seed 0, frames 0-1: a
+        walker at 3 m, 62.7 px, its left-key region at 57.6 px). With a track about, no search anew is made;
+        one at the region's border or beyond an occluder has its disparity tried after (occlusion:plate seed
+        1, frame 89: 47 px of a plate at the left edge peaked 0.5 px off anew, its track's 14.90 px right)."""
         cfg = self.cfg
         around = around or []
         x0, y0, x1, y1 = box
