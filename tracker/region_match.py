@@ -139,23 +139,19 @@ class RegionMatcher:
     def _coarse_disparity(self, frame: StereoFrame, box: Box, region: BoolA, d0: float | None) -> float | None:
         """d0 if known, else the region's disparity from a search over the whole range (None: no match).
         A new object whose depth varies (a walker's swinging legs) may match nowhere as one surface, as a
-        tracked one may (match_object): then its top, middle and bottom thirds are searched in turn, and where
-        none matches on MATCH_HALF windows, on windows half as wide (a near walker's slanted faces: walk:body
-        seed 0 frame 0, its whole outline 0.49-0.58 at any one disparity, 24 x 16 px of its torso 0.997). This
-        is every new object's coarse search: the temporal stage's and the moving cameras' too."""
+        tracked one may (match_object): then its top, middle and bottom thirds are searched in turn."""
         if d0 is not None:
             return d0
-        for half in (MATCH_HALF, _MATCH_HALF_SLANT):
-            for part in row_thirds(region):
-                strips = self._strips(frame, box, part, None, half)
-                coarse = None if strips is None else strips.match(part, None, 0)
-                if strips is None or coarse is None:
-                    continue
-                if not strips.clipped:
-                    return coarse.disparity
-                far, reach = self._narrow_match(frame, box, part)
-                beyond = far is not None and reach > strips.d_hi and far.disparity > strips.d_hi + 1.0
-                return None if beyond else coarse.disparity  # the peak inside the reach may be a false one
+        for part in row_thirds(region):
+            strips = self._strips(frame, box, part, None)
+            coarse = None if strips is None else strips.match(part, None, 0)
+            if strips is None or coarse is None:
+                continue
+            if not strips.clipped:
+                return coarse.disparity
+            far, reach = self._narrow_match(frame, box, part)
+            beyond = far is not None and reach > strips.d_hi and far.disparity > strips.d_hi + 1.0
+            return None if beyond else coarse.disparity  # the peak inside the reach may be a false one
         return None
 
     def _narrow_match(self, frame: StereoFrame, box: Box, region: BoolA) -> tuple[RegionMatch | None, int]:

@@ -125,17 +125,14 @@ class Verifier(RegionMatcher):
             if hint is None and len(around) == 1 and at_left_border(m_left, box, around[0]):
                 hint = around[0]  # one track predicted past the region's edge (a car split by a post)
             new_later = hint is None and may_search is not None and not may_search()
-            beyond = [] if hint is not None or new_later else (border_hints(hints, m_left, box) or
-                                                               beyond_occluder_hints(hints, m_left, box, cm,
-                                                                                     cfg.min_depth_gap,
-                                                                                     cfg.min_disparity_gap_px))
             got = None if new_later or self._too_small_to_be_new(n_left, hint) else self._verify_region(
-                frame, box, cm, m_left, hint, free, around, found, m_raw & ~m_left,
-                anew=hint is None and not around and not beyond)
+                frame, box, cm, m_left, hint, free, around, found, m_raw & ~m_left)
             if got is None and hint is not None and at_left_border(m_left, box, hint):
                 got, m_left = self._every_region_at_border(frame, box, cm, (m_raw, m_left), hint, free, around,
                                                            found)
             if got is None and hint is None and not new_later:  # no track's, and not found (or too small) anew
+                beyond = border_hints(hints, m_left, box) or beyond_occluder_hints(
+                    hints, m_left, box, cm, cfg.min_depth_gap, cfg.min_disparity_gap_px)
                 got = next((g for d in beyond if (g := self._verify_region(
                     frame, box, cm, m_left, d, free, around, found)) is not None), None)
                 got = None if got is None else (replace(got[0], part_only=True), got[1])
@@ -232,20 +229,14 @@ class Verifier(RegionMatcher):
 
     def _verify_region(self, frame: StereoFrame, box: Box, cm: CorrespondenceMap, m_left: BoolA,
                        d_hint: float | None, free: BoolA, around: list[float] | None = None,
-                       found: list[Blob] | None = None, rest: BoolA | None = None, anew: bool = False
+                       found: list[Blob] | None = None, rest: BoolA | None = None
                        ) -> tuple[Blob, BoolA | None] | None:
         """Verify one connected region of the left-key mask inside a box. Returns the blob and, with the
         cameras still, the box's pixels unlike the temporal background (|Γ - g B| > ε + 3 g D).
         around: the predicted disparities of the tracks about the region (regions.hints_around); with more
         than one, a tracked object's outline keeps only its pixels that match best at its own (tracker.split).
         found: the objects found before in the box (they stay out of the outline's gain). rest: the box's
-        other left-key pixels, where a head past the neck's gap may lie (_outline_stereo). anew: no track is
-        predicted in the region, about it, at its border or beyond an occluder: where the outline the temporal
-        model drew does not match about the coarse disparity of the left-key region (the object and its
-        occlusion shadow), the outline is searched anew over the whole range (walk:body seed 0, frames 0-1: a
-        walker at 3 m, 62.7 px, its left-key region at 57.6 px). With a track about, no search anew is made;
-        one at the region's border or beyond an occluder has its disparity tried after (occlusion:plate seed
-        1, frame 89: 47 px of a plate at the left edge peaked 0.5 px off anew, its track's 14.90 px right)."""
+        other left-key pixels, where a head past the neck's gap may lie (_outline_stereo)."""
         cfg = self.cfg
         around = around or []
         x0, y0, x1, y1 = box
@@ -265,8 +256,6 @@ class Verifier(RegionMatcher):
                 obj, gain, changed = self._temporal_outline(frame, box, model, obj, either & free, found)
         radius, tracked = self.search_radius(d_hint), d_hint is not None
         fine = self.match_part_or_whole(frame, box, matched, obj, d0, radius, tracked)
-        if fine is None and anew and model is not None:  # the outline the model drew, searched anew
-            fine = self.match_object(frame, box, obj, None, radius, False)
         if fine is None:
             return None
         if self.rim is not None and model is not None and changed is not None:  # cameras still (the model
