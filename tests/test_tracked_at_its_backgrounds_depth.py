@@ -18,12 +18,11 @@ def test_an_object_at_its_backgrounds_depth_is_kept_when_tracked_changed_and_not
     obj[5:15, 5:15] = True  # 100 px
     changed = np.zeros_like(obj)
     changed[5:10, 5:15] = True  # 50 of them changed
-    assert keep(True, (obj, changed), 1.1)
-    assert not keep(False, (obj, changed), 1.1)  # no track's prediction
-    assert not keep(True, (obj, changed), -0.08)  # behind its background
-    assert not keep(True, (obj, None), 1.1)  # no temporal model
+    assert keep((obj, changed), 1.1)
+    assert not keep((obj, changed), -0.08)  # behind its background
+    assert not keep((obj, None), 1.1)  # no temporal model
     changed[9] = False  # 40 changed
-    assert not keep(True, (obj, changed), 1.1)
+    assert not keep((obj, changed), 1.1)
 
 
 def test_a_walker_before_a_wall_at_its_own_depth_keeps_its_tracked_outline(monkeypatch: pytest.MonkeyPatch) -> None:

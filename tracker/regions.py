@@ -181,10 +181,10 @@ def beyond_occluder_hints(hints: F64 | None, region: BoolA, box: Box, cm: Corres
     return [d for _, d in sorted(out)]
 
 
-def changed_at_depth(tracked: bool, masks: tuple[BoolA, BoolA | None], ahead: float) -> bool:
-    """Whether an object not in front of its background by the depth-gap test is a tracked object at its
-    background's depth rather than a misregistered background patch (`tracked`: verified at its track's
-    prediction; the changed pixels None: no temporal model, the cameras moving): not behind the background
+def changed_at_depth(masks: tuple[BoolA, BoolA | None], ahead: float) -> bool:
+    """Whether a tracked object (the caller's to tell: verified at its track's prediction) not in front of
+    its background by the depth-gap test is at its background's depth rather than a misregistered background
+    patch (the changed pixels None: no temporal model, the cameras moving): not behind the background
     (`ahead`, its disparity less the map's behind it, >= 0) and at least half of its outline changed in the
     temporal model (masks: the outline, the changed pixels). endless:body frame 1327: a walker before the
     low wall at its own depth, matched at 20.74 px before a map of 19.60 px; refused, the temporal stage's
@@ -192,6 +192,6 @@ def changed_at_depth(tracked: bool, masks: tuple[BoolA, BoolA | None], ahead: fl
     0.08-0.41 px, the place a walker stood while the first frame was learnt as the background (`eval
     --startup`, first-frame) was taken so at frames 286-287, a false target."""
     obj, changed = masks
-    if not tracked or changed is None or ahead < 0.0:
+    if changed is None or ahead < 0.0:
         return False
     return int(np.count_nonzero(obj & changed)) >= 0.5 * int(np.count_nonzero(obj))

@@ -280,8 +280,8 @@ class Verifier(RegionMatcher):
             far = self._seen_through(cm, obj, fine.disparity, min(d_bg, behind), d_hint, around)
             if far is not None and in_front(fine.disparity, far, gap, gap_px):
                 d_bg = far
-            elif not changed_at_depth(d_hint is not None, (obj, changed), fine.disparity - min(d_bg, behind)):
-                return None  # not in front of the background: a misregistered background patch
+            elif d_hint is None or not changed_at_depth((obj, changed), fine.disparity - min(d_bg, behind)):
+                return None  # not in front of the background, untracked or unchanged: a misregistered patch
         # eq. (10) in rectified coordinates, pixels weighted by their area: Σ a x / Σ a, Σ a y / Σ a
         sx, sy, sa, _ = cv2.mean(self.rect.area_moments[y0:y1, x0:x1], mask=m8)
         return Blob(box, obj, area, c_raw, np.array([sx / sa, sy / sa]), fine.disparity, fine.sigma, d_bg,
