@@ -25,11 +25,11 @@ def test_the_schema_examples_are_valid_instances() -> None:
 
     from pydantic import BaseModel
 
-    from server import alarm_schemas, recording_schemas, schemas
+    from server import alarm_schemas, recording_schemas, schemas, settings_schemas
     from server.routes import live
 
     checked = 0
-    for module in (schemas, alarm_schemas, recording_schemas, live):
+    for module in (schemas, alarm_schemas, recording_schemas, settings_schemas, live):
         for _, model in inspect.getmembers(module, inspect.isclass):
             if not issubclass(model, BaseModel) or model.__module__ != module.__name__:
                 continue

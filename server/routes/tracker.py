@@ -7,8 +7,9 @@ from typing import Any
 from fastapi import APIRouter
 
 from server.deps import Address, Admin, CtxDep, DbDep, Viewer
-from server.schemas import Message, TrackerSettings, TrackerSettingsPatch
+from server.schemas import Message
 from server.services import control
+from server.settings_schemas import TrackerSettings, TrackerSettingsPatch
 
 router = APIRouter(prefix="/api/tracker", tags=["tracker"])
 

@@ -16,9 +16,9 @@ from sqlalchemy.exc import OperationalError
 from sqlalchemy.orm import Session
 
 from server.db.models import ServoPreset, SettingsChange, User
-from server.schemas import TrackerSettings, TrackerSettingsPatch
 from server.services import audit
 from server.services.errors import Conflict, Invalid, NotFound, one_line
+from server.settings_schemas import TrackerSettings, TrackerSettingsPatch
 from tmeye.runtime import NoServoError, Runtime, ServoMode, ServoRequestError, TrackerTuning
 from tmeye.runtime.servo import ServoWish
 
