@@ -82,3 +82,21 @@ def test_a_region_wide_enough_to_reach_its_disparity_is_matched_there() -> None:
     pipe, frame, box, region = _pair(60.0)
     d = pipe.verifier._coarse_disparity(frame, box, region, None)
     assert d is not None and abs(d - D) < 0.5
+
+
+def test_a_track_stepping_in_whose_search_fails_about_its_prediction_is_searched_over_its_reach() -> None:
+    # endless:body seed 1, frames 2469-2475: a walker stepping in at the left edge at 17.2 px, its track born
+    # at 8.97 px while the edge cut its search short, failed to match about 12.16 px, and the one-camera
+    # stage held that: 5 m too far. The region (cut by the edge, wide enough now) is searched over its reach
+    pipe, frame, box, region = _pair(60.0)
+    for d0 in (10.0, D - PERIOD):  # predictions short of its disparity, the decoy's among them
+        fine = pipe.verifier.match_object(frame, box, region, d0, 1, tracked=True)
+        assert fine is not None and abs(fine.disparity - D) < 0.2
+    # a prediction past the peak found is not moved back to it: a search cut short finds false peaks short of
+    # the true one (endless:plate seed 1, frames 2632-2636: a board leaving at 18.4 px, so matched at 5.9 px)
+    assert pipe.verifier.match_object(frame, box, region, 40.0, 1, tracked=True) is None
+    # a region the edge does not cut (its first columns off): not searched anew, as a track's is not elsewhere
+    inside = region.copy()
+    inside[:, :3] = False
+    assert pipe.verifier.match_object(frame, box, inside, 10.0, 1, tracked=True) is None
+    assert pipe.verifier.match_object(frame, box, region, 10.0, 1, tracked=False) is None  # not a track's

@@ -74,8 +74,25 @@ class RegionMatcher:
         near object's slanted faces, whose disparity changes across the window by several pixels (a face at
         45° across 48 px at 3 m: about 5 px), match nowhere at one disparity: then windows half as wide.
         tracked: d0 is a track's prediction (or a body's found this frame), so a small region's whole
-        outline may give the disparity where its core's match disagrees or fails (Strips.match)."""
-        d0 = self._coarse_disparity(frame, box, obj, d0)
+        outline may give the disparity where its core's match disagrees or fails (Strips.match). Near the
+        image's left edge, where that fails for a region the edge cuts (`_stepping_in`), the region is
+        searched over its whole reach as a new object's (`_coarse_disparity`): a track born as it came in,
+        its search cut short, may hold a false peak (endless:body seed 1, frames 2465-2475: a walker stepping
+        in at 17.2 px, born at 8.97 px, held at 12.16 px by the one-camera stage in frames 2469-2475). Its
+        peak is taken only past the prediction's search (a false peak of a search cut short lies short of
+        the true one). Not where the edge does not cut it: a 10 px sliver of a person at 18 px, 58 px from
+        the edge, so searched peaked at 57.6 px (frame 2518)."""
+        fine = self._match_about(frame, box, obj, self._coarse_disparity(frame, box, obj, d0), radius, tracked)
+        if fine is None and tracked and d0 is not None and self._stepping_in(frame, box, obj, d0):
+            # a track born as it came in, its search cut short, may hold a false peak short of its disparity
+            anew = self._match_about(frame, box, obj, self._coarse_disparity(frame, box, obj, None), radius,
+                                     tracked)
+            fine = anew if anew is not None and anew.disparity > d0 + radius else None
+        return fine
+
+    def _match_about(self, frame: StereoFrame, box: Box, obj: BoolA, d0: float | None, radius: int,
+                     tracked: bool) -> RegionMatch | None:
+        """`match_object`'s refining about a coarse disparity d0 (None: nothing to refine, None)."""
         if d0 is None:
             return None
         for half in (first_window(obj), _MATCH_HALF_SLANT):
@@ -85,6 +102,17 @@ class RegionMatcher:
                 if fine is not None and strips is not None:
                     return self._within_reach(frame, box, part, strips, fine)
         return None
+
+    def _stepping_in(self, frame: StereoFrame, box: Box, region: BoolA, d0: float) -> bool:
+        """Whether the region is cut by the image's left edge (it reaches column 0), a search of it over the
+        whole range is cut short there, and the track's prediction d0 (px) lies inside that search's reach
+        by 2 px (`_within_reach`'s margin): a track leaving past the edge, its disparity held beyond the
+        shrinking reach, would find only false peaks there (endless:plate seed 1, frames 2632-2636: a board
+        at 18.4 px so matched at 5.9 and 10.7 px)."""
+        if box[0] > 0 or not region[:, 0].any():
+            return False
+        strips = self._strips(frame, box, region, None)
+        return strips is not None and strips.clipped and d0 <= strips.d_hi - 2.0
 
     def _within_reach(self, frame: StereoFrame, box: Box, region: BoolA, strips: Strips, fine: RegionMatch
                       ) -> RegionMatch | None:
