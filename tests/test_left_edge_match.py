@@ -89,14 +89,22 @@ def test_a_track_stepping_in_whose_search_fails_about_its_prediction_is_searched
     # at 8.97 px while the edge cut its search short, failed to match about 12.16 px, and the one-camera
     # stage held that: 5 m too far. The region (cut by the edge, wide enough now) is searched over its reach
     pipe, frame, box, region = _pair(60.0)
-    for d0 in (10.0, D - PERIOD):  # predictions short of its disparity, the decoy's among them
+    reach = pipe.verifier._strips(frame, box, region, None)
+    assert reach is not None and reach.clipped and reach.d_hi - 2.0 > 30.0 > D  # cut short, D inside it
+    for d0 in (10.0, D - PERIOD):  # predictions short of its disparity, where the search about them fails
+        assert pipe.verifier._stepping_in(frame, box, region, d0)
         fine = pipe.verifier.match_object(frame, box, region, d0, 1, tracked=True)
         assert fine is not None and abs(fine.disparity - D) < 0.2
     # a prediction past the peak found is not moved back to it: a search cut short finds false peaks short of
     # the true one (endless:plate seed 1, frames 2632-2636: a board leaving at 18.4 px, so matched at 5.9 px)
-    assert pipe.verifier.match_object(frame, box, region, 40.0, 1, tracked=True) is None
-    # a region the edge does not cut (its first columns off): not searched anew, as a track's is not elsewhere
+    assert pipe.verifier._stepping_in(frame, box, region, 30.0)
+    assert pipe.verifier.match_object(frame, box, region, 30.0, 1, tracked=True) is None
+    # nor searched anew at all where the prediction lies past the reach less 2 px (a track leaving)
+    assert not pipe.verifier._stepping_in(frame, box, region, reach.d_hi - 1.0)
+    # the same region with its first columns taken off, so that it no longer reaches column 0: not searched
+    # anew, as a track's is not away from the edge
     inside = region.copy()
     inside[:, :3] = False
+    assert not pipe.verifier._stepping_in(frame, box, inside, 10.0)
     assert pipe.verifier.match_object(frame, box, inside, 10.0, 1, tracked=True) is None
     assert pipe.verifier.match_object(frame, box, region, 10.0, 1, tracked=False) is None  # not a track's

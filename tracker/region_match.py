@@ -75,8 +75,10 @@ class RegionMatcher:
         45° across 48 px at 3 m: about 5 px), match nowhere at one disparity: then windows half as wide.
         tracked: d0 is a track's prediction (or a body's found this frame), so a small region's whole
         outline may give the disparity where its core's match disagrees or fails (Strips.match). Near the
-        image's left edge, where that fails for a region the edge cuts (`_stepping_in`), the region is
-        searched over its whole reach as a new object's (`_coarse_disparity`): a track born as it came in,
+        image's left edge, where that fails for a region the edge cuts (`_stepping_in`), the region's coarse
+        disparity is searched over its whole reach as a new object's is (`_coarse_disparity`), then refined
+        as above (radius, tracked; d0 as the caller gives it: a track's prediction, or a part's, a
+        neighbour's or a hidden part's disparity with tracked set, tracker.verify): a track born as it came in,
         its search cut short, may hold a false peak (endless:body seed 1, frames 2465-2475: a walker stepping
         in at 17.2 px, born at 8.97 px, held at 12.16 px by the one-camera stage in frames 2469-2475). Its
         peak is taken only past the prediction's search (a false peak of a search cut short lies short of
@@ -105,10 +107,10 @@ class RegionMatcher:
 
     def _stepping_in(self, frame: StereoFrame, box: Box, region: BoolA, d0: float) -> bool:
         """Whether the region is cut by the image's left edge (it reaches column 0), a search of it over the
-        whole range is cut short there, and the track's prediction d0 (px) lies inside that search's reach
-        by 2 px (`_within_reach`'s margin): a track leaving past the edge, its disparity held beyond the
-        shrinking reach, would find only false peaks there (endless:plate seed 1, frames 2632-2636: a board
-        at 18.4 px so matched at 5.9 and 10.7 px)."""
+        whole range is cut short there, and d0 (px; `match_object`'s, mostly a track's prediction) lies inside
+        that search's reach by 2 px (`_within_reach`'s margin): a track leaving past the edge, its disparity
+        held beyond the shrinking reach, would find only false peaks there (endless:plate seed 1, frames
+        2632-2636: a board at 18.4 px so matched at 5.9 and 10.7 px)."""
         if box[0] > 0 or not region[:, 0].any():
             return False
         strips = self._strips(frame, box, region, None)
