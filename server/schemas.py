@@ -354,4 +354,3 @@ class AuditOut(BaseModel):
     action: str
     target: str | None
     detail: dict[str, Any] | None
-
